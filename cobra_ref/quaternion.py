@@ -1,0 +1,60 @@
+"""Unit quaternions, w-first (``quat_wxyz``), as in MuJoCo and MJCF.
+
+A quaternion ``(w, x, y, z)`` represents the rotation R that maps body coordinates to world
+coordinates (MuJoCo's ``xquat``). scipy's ``Rotation.from_quat`` is scalar-LAST unless told
+otherwise; cobra_ref never hands a quaternion to scipy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def quat_to_rot(quat_wxyz: np.ndarray) -> np.ndarray:
+    """Rotation matrix of a unit quaternion (body -> world).
+
+    Implements: the Euler-Rodrigues formula R = (w^2 - u.u) 1 + 2 u u^T + 2 w [u]x, u = (x, y, z).
+    """
+    w, x, y, z = quat_wxyz
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product a * b (rotation b first, then a)."""
+    aw, av = a[0], a[1:]
+    bw, bv = b[0], b[1:]
+    return np.concatenate([[aw * bw - av @ bv], aw * bv + bw * av + np.cross(av, bv)])
+
+
+def quat_exp(rotvec: np.ndarray) -> np.ndarray:
+    """Quaternion of the rotation by angle |rotvec| about rotvec/|rotvec| (exponential map)."""
+    angle = float(np.linalg.norm(rotvec))
+    if angle < 1e-12:
+        # second-order Taylor expansion of (cos(a/2), sin(a/2)/a * rotvec)
+        return np.concatenate([[1.0 - angle**2 / 8.0], 0.5 * rotvec])
+    return np.concatenate([[np.cos(angle / 2)], np.sin(angle / 2) / angle * rotvec])
+
+
+def rot_to_quat(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w >= 0) of a rotation matrix (Shepperd's method)."""
+    t = np.trace(R)
+    if t > 0:
+        s = 2.0 * np.sqrt(1.0 + t)
+        q = np.array([s / 4, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s])
+    else:
+        i = int(np.argmax(np.diag(R)))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = 2.0 * np.sqrt(1.0 + R[i, i] - R[j, j] - R[k, k])
+        q = np.zeros(4)
+        q[0] = (R[k, j] - R[j, k]) / s
+        q[1 + i] = s / 4
+        q[1 + j] = (R[j, i] + R[i, j]) / s
+        q[1 + k] = (R[k, i] + R[i, k]) / s
+    q = q / np.linalg.norm(q)
+    return q if q[0] >= 0 else -q
