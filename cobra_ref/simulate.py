@@ -1,0 +1,222 @@
+"""simulate(): roll the stepper forward, log every step and every contact, write NPZ.
+
+Implements: the paper's "time-stepping methodology ... over Delta t" ([COBRA] sec. III) on top
+of :mod:`cobra_ref.stepper`.
+
+Logged per step (arrays of length N+1 for states, N for steps):
+
+* ``t, q, qd, box_pose`` (x y z qw qx qy qz), ``tau`` (N, 11) joint torques over each step;
+* solver records: ``osqp_status`` (1 solved, 2 OSQP "solved inaccurate", 3 friction fixed
+  point not converged and clipped), ``osqp_iter``, ``fp_iter``, ``complementarity``,
+  ``cone_residual``, ``stick_residual``, ``max_penetration``, ``cond_G``, ``n_contacts``,
+  ``tau_excess`` (max |tau| - tau_max, <= 0 means within limits), ``q_excess`` (same for |q|);
+* energy: ``kinetic``, ``potential`` (at each step start), ``work_actuators`` (dt tau . u_mid
+  over the joints) and ``work_contacts`` (p . J_c u_mid, <= 0 = dissipated by friction and
+  contact), both at the step's midpoint velocity u_mid = (u + u+) / 2, for which
+  Delta KE = u_mid . M (u+ - u) holds exactly at fixed M;
+* a flat contact log with one row per active contact per step (p_N > 0): ``contact_step``,
+  ``contact_kind`` (0 robot-ground, 1 robot-box, 2 box-ground), ``contact_body`` (body A:
+  the robot link, or the box for box-ground), ``contact_point`` (world, the midpoint of the
+  two witness points), ``contact_normal`` (world, from B to A), ``contact_force`` (world,
+  the force ON body A BY body B, = frame @ p / dt; the box feels minus this from the robot).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .contact_qp import ContactSolveError
+from .model import Model
+from .reference import N_JOINTS
+from .robots import neutral_q
+from .stepper import SimulationError, StepSettings, Stepper
+
+# per-step solver status: 1 solved, 2 OSQP "solved inaccurate", 3 friction fixed point not converged
+STATUS_CODES = {"solved": 1, "solved inaccurate": 2, "not converged": 3}
+STEP_KEYS = ("osqp_status", "osqp_iter", "fp_iter", "complementarity", "cone_residual", "stick_residual",
+             "max_penetration", "cond_G", "n_contacts", "tau_excess", "q_excess", "kinetic", "potential",
+             "work_actuators", "work_contacts")
+CONTACT_KEYS = ("contact_step", "contact_kind", "contact_body", "contact_point", "contact_normal", "contact_force")
+
+
+@dataclass
+class Trajectory:
+    """Everything a simulation computed (complete, or up to a failure: see ``error``)."""
+
+    dt: float
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    tau: np.ndarray
+    box_pose: np.ndarray
+    steps: dict
+    contacts: dict
+    wall_time: float = 0.0
+    error: str = ""
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0]) if len(self.t) else 0.0
+
+    def summary(self) -> dict:
+        """The one-line JSON summary of ``cobra-ref simulate``."""
+        d = self.box_pose[-1, :2] - self.box_pose[0, :2] if len(self.box_pose) else np.zeros(2)
+        return {
+            "box_displacement": [round(float(x), 6) for x in d],
+            "max_penetration": float(np.max(self.steps["max_penetration"], initial=0.0)),
+            "max_cone_residual": float(np.max(self.steps["cone_residual"], initial=0.0)),
+            "real_time_factor": round(self.duration / self.wall_time, 4) if self.wall_time > 0 else None,
+            "steps": int(len(self.tau)),
+            "error": self.error or None,
+        }
+
+    def to_npz(self, path: str) -> None:
+        """Write every array to an NPZ atomically (temporary file + rename: never half-written)."""
+        directory = os.path.dirname(os.path.abspath(path)) or "."
+        if not os.path.isdir(directory):
+            raise OSError(f"output directory does not exist: {directory}")
+        arrays = dict(t=self.t, q=self.q, qd=self.qd, tau=self.tau, box_pose=self.box_pose, dt=np.array(self.dt),
+                      meta=np.array(json.dumps(self.meta)), error=np.array(self.error), **self.steps, **self.contacts)
+        fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp_", suffix=".npz")
+        os.close(fd)
+        try:
+            np.savez_compressed(tmp, **arrays)
+            os.replace(tmp, path)
+        finally:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+
+
+def initial_state(model: Model, reference, box_offset=(0.0, -0.12), clearance: float = 1e-3):
+    """Robot at rest in the reference's t = 0 shape, head at the origin facing +x, lowest sphere
+    ``clearance`` above the ground; the box resting on the ground with its centre at
+    ``box_offset`` = (dx, dy) from the middle link's centre (L5-L6 region; assumption C9).
+
+    The default dy = -0.12 m puts the box 12 mm from the side of the middle link
+    (0.0535 + 0.05 + 0.0165 m) on the side the built-in rolling gait moves towards (-y).
+    """
+    from .kinematics import forward_kinematics
+
+    q = neutral_q(model)
+    act_q = [model.q_idx[i].start for i, jt in enumerate(model.joint_type) if jt != "free"]
+    q[act_q] = reference(0.0)[0]
+    kin = forward_kinematics(model, q)
+    sph = model.spheres
+    bottoms = [kin.p[b][2] + (kin.R[b] @ c)[2] - r for b, c, r in zip(sph.body, sph.center, sph.radius)]
+    q[2] = clearance - min(bottoms)
+    if model.boxes:
+        box = model.boxes[0]
+        mid = len(model.body_names) // 2 - 1  # the middle link of the robot (L6 for COBRA)
+        centre = kin.p[mid] + kin.R[mid] @ model.com[mid]
+        iq = model.q_idx[box.body]
+        q[iq.start:iq.start + 3] = [centre[0] + box_offset[0], centre[1] + box_offset[1], box.half[2]]
+    return q, np.zeros(model.nv)
+
+
+def simulate(model: Model, reference, duration: float, settings: StepSettings = StepSettings(), q0=None,
+             qd0=None, progress=None, box_offset=(0.0, -0.12)) -> Trajectory:
+    """Simulate ``duration`` seconds; return a Trajectory (see the module docstring for fields).
+
+    Raises ``SimulationError`` for a bad duration, an initial state in deep penetration, or a
+    contact solver failure mid-run; the failure names the step and time, and its
+    ``trajectory`` attribute keeps everything computed before it.
+    """
+    if not (np.isfinite(duration) and duration > 0):
+        raise SimulationError(f"duration must be positive and finite, got {duration}")
+    if q0 is None:
+        q0, qd0 = initial_state(model, reference, box_offset)
+    q, qd = model.check_q(q0).copy(), model.check_qd(np.zeros(model.nv) if qd0 is None else qd0).copy()
+    stepper = Stepper(model, settings)
+    _check_start(stepper, q, qd)
+    n_steps = int(round(duration / settings.dt))
+    log = _Log(model, n_steps, settings.dt)
+    log.add_state(0.0, q, qd)
+    start = time.perf_counter()
+    for k in range(n_steps):
+        t = k * settings.dt
+        try:
+            res = stepper.step(q, qd, t, reference)
+        except (ContactSolveError, np.linalg.LinAlgError) as exc:
+            traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): {exc}")
+            raise SimulationError(f"contact solve failed at step {k}, t = {t:.4f} s: {exc}", traj) from exc
+        q, qd = res.q, res.qd
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+            traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): non-finite state")
+            raise SimulationError(f"non-finite state at step {k}, t = {t:.4f} s", traj)
+        log.add_step(k, res, stepper)
+        log.add_state(t + settings.dt, q, qd)
+        if progress is not None and (k + 1) % 250 == 0:
+            progress(k + 1, n_steps)
+    return log.finish(time.perf_counter() - start)
+
+
+def _check_start(stepper: Stepper, q, qd) -> None:
+    terms = stepper.chain.terms(q, qd)
+    from .contact import KINDS, find_contacts
+
+    contacts = find_contacts(stepper.model, terms, 0.0)
+    if contacts.m and contacts.g.min() < -stepper.s.max_start_penetration:
+        k = int(np.argmin(contacts.g))
+        raise SimulationError(
+            f"initial state in deep penetration: {KINDS[contacts.kind[k]]} contact on body "
+            f"'{stepper.model.body_names[contacts.body_A[k]]}' is {-contacts.g[k] * 1000:.1f} mm deep "
+            f"(allowed {stepper.s.max_start_penetration * 1000:.1f} mm)")
+
+
+class _Log:
+    """Preallocated per-step arrays and a growing contact log."""
+
+    def __init__(self, model: Model, n_steps: int, dt: float):
+        self.model, self.dt, self.n = model, dt, 0
+        self.t = np.zeros(n_steps + 1)
+        self.q = np.zeros((n_steps + 1, model.nq))
+        self.qd = np.zeros((n_steps + 1, model.nv))
+        self.tau = np.zeros((n_steps, N_JOINTS))
+        self.steps = {k: np.zeros(n_steps) for k in STEP_KEYS}
+        self.contact_rows = {k: [] for k in CONTACT_KEYS}
+        self.box = model.q_idx[model.boxes[0].body] if model.boxes else None
+
+    def add_state(self, t, q, qd):
+        i = self.n
+        self.t[i], self.q[i], self.qd[i] = t, q, qd
+
+    def add_step(self, k, res, stepper):
+        s, info, cs = self.steps, res.qp, res.contacts
+        s["osqp_status"][k] = STATUS_CODES[info.status.split(" (")[0] if "(" not in info.status else "not converged"]
+        s["osqp_iter"][k], s["fp_iter"][k] = info.iterations, info.fp_iterations
+        s["complementarity"][k], s["cone_residual"][k] = info.complementarity, info.cone_residual
+        s["stick_residual"][k], s["cond_G"][k] = info.stick_slip_residual, info.cond_G
+        s["max_penetration"][k] = max(0.0, -float(cs.g.min())) if cs.m else 0.0
+        s["n_contacts"][k] = cs.m
+        s["tau_excess"][k] = float(np.max(np.abs(res.tau) - stepper.tau_max))
+        s["q_excess"][k] = float(np.max(np.abs(res.q[stepper.act_q]) - stepper.q_max))
+        s["kinetic"][k], s["potential"][k] = res.kinetic, res.potential
+        s["work_actuators"][k], s["work_contacts"][k] = res.work_actuators, res.work_contacts
+        self.tau[k] = res.tau
+        active = np.flatnonzero(res.p[0::3] > 1e-12)
+        if len(active):
+            rows = self.contact_rows
+            rows["contact_step"].append(np.full(len(active), k))
+            rows["contact_kind"].append(cs.kind[active])
+            rows["contact_body"].append(cs.body_A[active])
+            rows["contact_point"].append(0.5 * (cs.point_A[active] + cs.point_B[active]))
+            rows["contact_normal"].append(cs.frame[active, :, 0])
+            p3 = res.p.reshape(-1, 3)[active]
+            rows["contact_force"].append(np.einsum("kij,kj->ki", cs.frame[active], p3) / self.dt)
+        self.n = k + 1
+
+    def finish(self, wall_time: float, error: str = "") -> "Trajectory":
+        n = self.n
+        shapes = {"contact_point": (0, 3), "contact_normal": (0, 3), "contact_force": (0, 3)}
+        contacts = {k: (np.concatenate(v) if v else np.zeros(shapes.get(k, (0,)))) for k, v in self.contact_rows.items()}
+        box_pose = self.q[:n + 1, self.box] if self.box is not None else np.zeros((n + 1, 7))
+        return Trajectory(self.dt, self.t[:n + 1].copy(), self.q[:n + 1].copy(), self.qd[:n + 1].copy(),
+                          self.tau[:n].copy(), box_pose.copy(), {k: v[:n].copy() for k, v in self.steps.items()},
+                          contacts, wall_time, error)

@@ -1,0 +1,168 @@
+"""One velocity-level ("non-impulsive") time step of COBRA, the box and the ground.
+
+Implements: [COBRA] eq. (1) discretized over dt, with the contact impulses of eq. (5)-(6)::
+
+    M (u+ - u) = dt (tau - h) + J_c^T p                     # eq. (1), impulses p = f dt
+    q+ = q (+) dt u+                                         # integrate(): semi-implicit Euler
+
+Contacts are persistent and there is no restitution: the QP asks the gap after the step to
+stay >= 0, g + dt g'+ >= 0, with a penetration g < 0 removed at the rate beta g / dt.
+
+Servo (notes C7; Eq. (6) constraints (2)-(3)):
+
+* ``"prescribed"`` (default, Simscape's "motion provided"): the 11 joints follow the
+  reference exactly. The joint velocity over the step is the secant
+  u+_a = (q_ref(t + dt) - q_a) / dt, so q_a(t + dt) = q_ref(t + dt) to rounding; only the
+  base and the box (12 DoF) are free, and the joint torques are recovered afterwards from
+  eq. (1) with the contact impulses: tau = M (u+ - u) / dt + h - J_c^T p / dt.
+  Torque limits are reported per step (``tau_excess``), never clipped silently.
+* ``"pd"``: tau = clip(K_p (q_ref - q) + K_d (qd_ref - qd), -tau_max, tau_max): saturation
+  enforced, joint-limit excursions reported per step (``q_excess``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from .contact import Contacts, contact_jacobian, find_contacts
+from .contact_qp import ContactQP, QPInfo
+from .fastdyn import ChainModel
+from .kinematics import integrate
+from .model import Model
+
+
+class SimulationError(RuntimeError):
+    """A simulation that cannot go on; ``trajectory`` (if set) holds what was computed."""
+
+    def __init__(self, message: str, trajectory=None):
+        super().__init__(message)
+        self.trajectory = trajectory
+
+
+@dataclass(frozen=True)
+class StepSettings:
+    """Settings of the time stepper (defaults: notes C14-C15 and the module docstring)."""
+
+    dt: float = 1e-3
+    servo: str = "prescribed"
+    kp: float = 100.0  # PD servo only [N m / rad] (notes C7)
+    kd: float = 2.0  # PD servo only [N m s / rad]
+    n_facets: int = 4
+    friction: str = "fixed-point"  # or "convex" (contact_qp module docstring)
+    reg: float = 1e-6
+    margin: float = 0.01  # candidate contacts within 10 mm
+    beta: float = 0.2  # fraction of a penetration removed per step
+    max_start_penetration: float = 0.005
+
+    def __post_init__(self):
+        if not (np.isfinite(self.dt) and self.dt > 0):
+            raise ValueError(f"dt must be positive and finite, got {self.dt}")
+        if self.servo not in ("prescribed", "pd"):
+            raise ValueError(f"servo must be 'prescribed' or 'pd', got {self.servo!r}")
+
+
+class StepResult(NamedTuple):
+    q: np.ndarray  # configuration after the step
+    qd: np.ndarray  # velocity after the step
+    tau: np.ndarray  # (11,) joint torques over the step
+    contacts: Contacts  # candidates at the start of the step
+    p: np.ndarray  # (3m,) impulses in the contact frames
+    w: np.ndarray  # (3m,) contact velocities after the step (J_c u+)
+    qp: QPInfo
+    kinetic: float  # kinetic energy at the start of the step
+    potential: float  # potential energy at the start of the step
+    work_actuators: float  # dt tau . u_mid over the joints, u_mid = (u + u+) / 2
+    work_contacts: float  # p . J_c u_mid: work of the contact impulses (<= 0: dissipated)
+
+
+class Stepper:
+    """Advances (q, qd) by one step for a given joint reference (see the module docstring)."""
+
+    def __init__(self, model: Model, settings: StepSettings = StepSettings()):
+        self.model, self.s = model, settings
+        self.chain = ChainModel(model)
+        self.qp = ContactQP(model.mu, settings.n_facets, settings.reg, friction=settings.friction)
+        self.act = np.concatenate([np.arange(model.v_idx[i].start, model.v_idx[i].stop)
+                                   for i, jt in enumerate(model.joint_type) if jt != "free"])
+        self.act_q = np.array([model.q_idx[i].start for i, jt in enumerate(model.joint_type) if jt != "free"])
+        self.tau_max = np.array([model.tau_limit[i] for i, jt in enumerate(model.joint_type) if jt != "free"])
+        self.q_max = np.array([model.q_limit[i] for i, jt in enumerate(model.joint_type) if jt != "free"])
+        prescribed = settings.servo == "prescribed"
+        self.free = np.setdiff1d(np.arange(model.nv), self.act) if prescribed else np.arange(model.nv)
+        self._warm: dict = {}
+        self._hint: dict = {}
+
+    def step(self, q: np.ndarray, qd: np.ndarray, t: float, reference) -> StepResult:
+        s, model, dt = self.s, self.model, self.s.dt
+        terms = self.chain.terms(q, qd)
+        M, h = terms.M, terms.h
+        # Step 1: actuation -- prescribed joint velocities, or PD torques
+        tau = np.zeros(model.nv)
+        qd_next = qd.copy()
+        if s.servo == "prescribed":
+            q_ref_next = reference(t + dt)[0]
+            qd_next[self.act] = (q_ref_next - q[self.act_q]) / dt
+        else:
+            q_ref, qd_ref, _ = reference(t)
+            tau_pd = s.kp * (q_ref - q[self.act_q]) + s.kd * (qd_ref - qd[self.act])
+            tau[self.act] = np.clip(tau_pd, -self.tau_max, self.tau_max)
+        # Step 2: eq. (1) without contact for the free coordinates F
+        F, P = self.free, np.setdiff1d(np.arange(model.nv), self.free)
+        M_FF = M[np.ix_(F, F)]
+        rhs = dt * (tau[F] - h[F]) - M[np.ix_(F, P)] @ (qd_next[P] - qd[P])
+        L = np.linalg.cholesky(M_FF)
+        qd_next[F] = qd[F] + _chol_solve(L, rhs)
+        # Step 3: contacts, J_c (eq. 3-4), Delassus G and free velocity c (eq. 5)
+        contacts = find_contacts(model, terms, s.margin, self._hint)
+        J = contact_jacobian(self.chain, terms, contacts)
+        Minv_JT = _chol_solve(L, J[:, F].T)
+        G = J[:, F] @ Minv_JT
+        c = J @ qd_next
+        g_stab = np.where(contacts.g >= 0, contacts.g, s.beta * contacts.g)
+        c[0::3] += g_stab / dt
+        # Step 4: least action, eq. (6)
+        keys = contacts.keys()
+        p_warm = np.concatenate([self._warm.get(k, np.zeros(3)) for k in keys]) if keys else None
+        p, info = self.qp.solve(G, c, p_warm)
+        qd_next[F] += Minv_JT @ p
+        w = J @ qd_next
+        # Step 5: joint torques from eq. (1) with the contact impulses (prescribed servo)
+        if s.servo == "prescribed":
+            tau = M @ (qd_next - qd) / dt + h - J.T @ p / dt
+        self._remember(keys, p, w, contacts)
+        # energy bookkeeping at the midpoint velocity: Delta KE = u_mid . M (u+ - u) exactly
+        u_mid = 0.5 * (qd + qd_next)
+        work_actuators = dt * float(tau[self.act] @ u_mid[self.act])
+        work_contacts = float(p @ (J @ u_mid))
+        kinetic = 0.5 * qd @ M @ qd
+        potential = self._potential(terms)
+        q_next = integrate(model, q, qd_next, dt)
+        return StepResult(q_next, qd_next, tau[self.act], contacts, p, w, info, kinetic, potential,
+                          work_actuators, work_contacts)
+
+    def _remember(self, keys, p, w, contacts):
+        """Warm starts and the sliding directions for the next step's contact frames."""
+        self._warm = {k: p[3 * i:3 * i + 3] for i, k in enumerate(keys)}
+        self._hint = {}
+        for i, k in enumerate(keys):
+            w_T = contacts.frame[i][:, 1:] @ w[3 * i + 1:3 * i + 3]
+            if np.linalg.norm(w_T) > 1e-6:
+                self._hint[k] = w_T
+
+    def _potential(self, terms) -> float:
+        com_w = terms.p + np.einsum("bij,bj->bi", terms.R, self.chain.com)
+        return float(-np.sum(self.chain.mass * (com_w @ self.model.gravity)))
+
+    def reset(self):
+        self._warm, self._hint = {}, {}
+
+
+def _chol_solve(L: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Solve (L L^T) X = B."""
+    from scipy.linalg import solve_triangular
+
+    Y = solve_triangular(L, B, lower=True, check_finite=False)
+    return solve_triangular(L.T, Y, lower=False, check_finite=False)
