@@ -53,6 +53,8 @@ class Contacts(NamedTuple):
 def find_contacts(model, terms: ChainTerms, margin: float, t_hint: dict | None = None) -> Contacts:
     """All candidate contacts with gap < margin, in a fixed order (ground, box, box corners).
 
+    Implements: the active set of [COBRA] eq. (2): contacts whose gap g_i is (nearly) closed.
+
     ``t_hint`` maps a contact key to a tangent direction (the previous sliding direction), so
     that t1 follows the slip and the friction pyramid is exact along it.
     """

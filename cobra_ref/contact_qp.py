@@ -65,7 +65,10 @@ class QPInfo(NamedTuple):
 
 
 def facet_directions(n_facets: int) -> np.ndarray:
-    """(K/2, 2) unit facet normals d_k in the (t1, t2) plane, angles 2 pi k / K."""
+    """(K/2, 2) unit facet normals d_k in the (t1, t2) plane, angles 2 pi k / K.
+
+    Helper: the facets of the friction pyramid that linearizes F_i of [COBRA] eq. (2).
+    """
     if n_facets < 4 or n_facets % 2:
         raise ValueError(f"n_facets must be an even number >= 4, got {n_facets}")
     angles = 2 * np.pi * np.arange(n_facets // 2) / n_facets
@@ -211,6 +214,8 @@ class ContactQP:
 
 def kkt_residuals(G: np.ndarray, c: np.ndarray, p: np.ndarray, mu: float, D: np.ndarray):
     """Complementarity, cone and stick residuals of p for the velocity-level eq. (2).
+
+    Implements: the optimality (KKT) conditions of [COBRA] eq. (6) = eq. (2) at velocity level.
 
     w = G p + c. Returns (max |p_N w_N|, relative cone violation, max |w_T| among contacts
     whose tangential impulse is strictly inside the pyramid).

@@ -102,18 +102,27 @@ def forward_dynamics(model: Model, q, qd, tau) -> np.ndarray:
 
 
 def body_kinetic_energies(model: Model, q, qd) -> np.ndarray:
-    """Kinetic energy of each body, 1/2 v_i^T I_i v_i ([RBDA] eq. (2.67))."""
+    """Kinetic energy of each body, 1/2 v_i^T I_i v_i ([RBDA] eq. (2.67)).
+
+    Implements: [RBDA] eq. (2.67), T_i = 1/2 v_i . I_i v_i.
+    """
     kin = forward_kinematics(model, q, qd)
     return np.array([0.5 * v @ I @ v for v, I in zip(kin.v, model.I)])
 
 
 def kinetic_energy(model: Model, q, qd) -> float:
-    """Total kinetic energy T = 1/2 qd^T M qd = sum of the bodies' kinetic energies."""
+    """Total kinetic energy T = 1/2 qd^T M qd = sum of the bodies' kinetic energies.
+
+    Implements: [RBDA] eq. (2.67) summed over the bodies.
+    """
     return float(body_kinetic_energies(model, q, qd).sum())
 
 
 def potential_energy(model: Model, q) -> float:
-    """Gravitational potential energy V = -sum_i m_i g . c_i (c_i = world COM of body i)."""
+    """Gravitational potential energy V = -sum_i m_i g . c_i (c_i = world COM of body i).
+
+    Implements: the gravity potential whose gradient is g(q) in [COBRA] eq. (1).
+    """
     kin = forward_kinematics(model, q)
     return float(-sum(m * model.gravity @ (p + R @ c)
                       for m, c, R, p in zip(model.mass, model.com, kin.R, kin.p)))
@@ -121,6 +130,8 @@ def potential_energy(model: Model, q) -> float:
 
 def spatial_momentum(model: Model, q, qd) -> np.ndarray:
     """Total spatial momentum about the world origin, world coordinates: sum X_0[i]^T I_i v_i.
+
+    Implements: [RBDA] sec. 2.13 (momentum h = I v, summed in world coordinates).
 
     ([RBDA] sec. 2.13; ^0X_i^* = (^iX_0)^T maps a body-coordinate force vector to world.)
     """

@@ -43,7 +43,7 @@ _BOX_BITS = {"contype": "2", "conaffinity": "3"}
 def to_mjcf(model: Model, timestep: float = 1e-3, kp: float = 100.0, kv: float = 2.0) -> str:
     """MJCF XML string of ``model``: same bodies, inertials, joints, contact geoms, actuators.
 
-    Helper for the MuJoCo cross-check ([MJ] XML reference). Position actuators (gains ``kp``,
+    Helper: the MuJoCo cross-check's model ([MJ] XML reference). Position actuators (gains ``kp``,
     ``kv``, force range +-tau_limit) drive every revolute joint; notes C7 gives the range.
     """
     root = ET.Element("mujoco", model=model.name)

@@ -26,14 +26,20 @@ def quat_to_rot(quat_wxyz: np.ndarray) -> np.ndarray:
 
 
 def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product a * b (rotation b first, then a)."""
+    """Hamilton product a * b (rotation b first, then a).
+
+    Helper: the Hamilton product (w-first).
+    """
     aw, av = a[0], a[1:]
     bw, bv = b[0], b[1:]
     return np.concatenate([[aw * bw - av @ bv], aw * bv + bw * av + np.cross(av, bv)])
 
 
 def quat_exp(rotvec: np.ndarray) -> np.ndarray:
-    """Quaternion of the rotation by angle |rotvec| about rotvec/|rotvec| (exponential map)."""
+    """Quaternion of the rotation by angle |rotvec| about rotvec/|rotvec| (exponential map).
+
+    Helper: exp(rotvec / 2) as a unit quaternion, as in MuJoCo's ``mju_quatIntegrate``.
+    """
     angle = float(np.linalg.norm(rotvec))
     if angle < 1e-12:
         # second-order Taylor expansion of (cos(a/2), sin(a/2)/a * rotvec)
@@ -42,7 +48,10 @@ def quat_exp(rotvec: np.ndarray) -> np.ndarray:
 
 
 def rot_to_quat(R: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w >= 0) of a rotation matrix (Shepperd's method)."""
+    """Unit quaternion (w >= 0) of a rotation matrix (Shepperd's method).
+
+    Helper: Shepperd's method, the inverse of quat_to_rot up to sign.
+    """
     t = np.trace(R)
     if t > 0:
         s = 2.0 * np.sqrt(1.0 + t)

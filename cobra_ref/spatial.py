@@ -70,7 +70,10 @@ def plux(E: np.ndarray, r: np.ndarray) -> np.ndarray:
 
 
 def xlt(r: np.ndarray) -> np.ndarray:
-    """Pure translation by ``r`` (B's origin at r in A, axes parallel). [RBDA] eq. (2.27)."""
+    """Pure translation by ``r`` (B's origin at r in A, axes parallel). [RBDA] eq. (2.27).
+
+    Implements: [RBDA] eq. (2.27).
+    """
     return plux(np.eye(3), r)
 
 
@@ -87,17 +90,26 @@ def _rot_axis(axis: int, theta: float) -> np.ndarray:
 
 
 def rotx(theta: float) -> np.ndarray:
-    """Motion transform for a frame rotated by theta about x. [RBDA] eq. (2.30), spatial_v2 rotx."""
+    """Motion transform for a frame rotated by theta about x. [RBDA] eq. (2.30), spatial_v2 rotx.
+
+    Implements: [RBDA] eq. (2.30) (spatial_v2 ``rotx``).
+    """
     return plux(_rot_axis(0, theta), np.zeros(3))
 
 
 def roty(theta: float) -> np.ndarray:
-    """Motion transform for a frame rotated by theta about y. [RBDA] eq. (2.30)."""
+    """Motion transform for a frame rotated by theta about y. [RBDA] eq. (2.30).
+
+    Implements: [RBDA] eq. (2.30) (spatial_v2 ``roty``).
+    """
     return plux(_rot_axis(1, theta), np.zeros(3))
 
 
 def rotz(theta: float) -> np.ndarray:
-    """Motion transform for a frame rotated by theta about z. [RBDA] eq. (2.30)."""
+    """Motion transform for a frame rotated by theta about z. [RBDA] eq. (2.30).
+
+    Implements: [RBDA] eq. (2.30) (spatial_v2 ``rotz``).
+    """
     return plux(_rot_axis(2, theta), np.zeros(3))
 
 
@@ -114,7 +126,10 @@ def inv_X(X: np.ndarray) -> np.ndarray:
 
 
 def force_X(X: np.ndarray) -> np.ndarray:
-    """Force transform X^* = X^-T for the motion transform X. [RBDA] eq. (2.25)."""
+    """Force transform X^* = X^-T for the motion transform X. [RBDA] eq. (2.25).
+
+    Implements: [RBDA] eq. (2.25).
+    """
     return inv_X(X).T
 
 
