@@ -16,8 +16,8 @@ impulse, w_T = 0 while p_T is inside the pyramid (stick) or p_T on its boundary 
 Note (friction): by default (``friction="fixed-point"``) the friction bound uses pbar_N, the
 normal impulse of the previous iterate, and the QP is re-solved until p_N stops changing (a
 De Saxce / "staggered projections" fixed point): at convergence the bound is mu p_N, exact
-Coulomb friction on the pyramid with 0 <= p_N _|_ w_N >= 0. Early iterates take the full
-update, later ones half of it (damping against cycling). If it still has not converged after
+Coulomb friction on the pyramid with 0 <= p_N _|_ w_N >= 0. Iterates take the full update
+while they contract and half of it from the first one that does not (damping against cycling). If it still has not converged after
 ``fp_max`` iterates -- robot, box and ground can jam -- the last iterate's friction is clipped
 into the pyramid of its own p_N and ``QPInfo.status`` says so; the step's velocities stay
 consistent with the impulses actually applied.
@@ -114,7 +114,7 @@ class ContactQP:
     """
 
     def __init__(self, mu: float, n_facets: int = 4, reg: float = 1e-6, eps: float = 1e-7,
-                 friction: str = "fixed-point", fp_tol: float = 1e-8, fp_max: int = 30,
+                 friction: str = "fixed-point", fp_tol: float = 1e-8, fp_max: int = 50,
                  max_iter: int = 20000):
         if not (np.isfinite(mu) and mu >= 0):
             raise ValueError(f"mu must be finite and >= 0, got {mu}")
@@ -169,12 +169,12 @@ class ContactQP:
         """One OSQP solve (polished when it can be); a failed one is retried cold, tighter."""
         solver.update(l=l, u=u)
         solver.warm_start(x=p0)
-        res = solver.solve()
+        res = solver.solve(raise_error=False)
         iters = res.info.iter
         if res.info.status != "solved":
             solver.update_settings(eps_abs=self.eps * 1e-2, eps_rel=self.eps * 1e-2)
             solver.warm_start(x=np.zeros(3 * m))
-            res = solver.solve()
+            res = solver.solve(raise_error=False)
             iters += res.info.iter
             solver.update_settings(eps_abs=self.eps, eps_rel=self.eps)
         if res.info.status not in ("solved", "solved inaccurate"):
@@ -187,7 +187,7 @@ class ContactQP:
         m = len(c) // 3
         solver = self._solver(m, P, c, convex=False)
         pbar_N = np.maximum(p[0::3], 0.0)
-        total, inaccurate = 0, False
+        total, inaccurate, damped, last_change = 0, False, False, np.inf
         for fp in range(1, self.fp_max + 1):
             bound = np.repeat(self.mu * pbar_N, len(self.D))
             l = np.concatenate([np.zeros(m), -bound])
@@ -195,10 +195,13 @@ class ContactQP:
             p, it, bad = self._run(solver, m, p, l, u)
             total, inaccurate = total + it, inaccurate or bad
             p_N = np.maximum(p[0::3], 0.0)
-            if np.abs(p_N - pbar_N).max() <= self.fp_tol * max(p_N.max(), 1e-12):
+            change = np.abs(p_N - pbar_N).max()
+            if change <= self.fp_tol * max(p_N.max(), 1e-12):
                 return p, total, fp, True, inaccurate
-            # full update first, then damped (relaxation 1/2) against two-cycles
-            pbar_N = p_N if fp < 5 else 0.5 * (pbar_N + p_N)
+            # full update while the iterates contract; relaxation 1/2 once they stop (two-cycles)
+            damped = damped or change > 0.9 * last_change
+            pbar_N = 0.5 * (pbar_N + p_N) if damped else p_N
+            last_change = change
         return p, total, self.fp_max, False, inaccurate
 
     def _clip_friction(self, p):

@@ -6,7 +6,7 @@ Jacobians to 1e-12 at random states. Use it for the time stepper, never as the d
 
 Idea: for a forest of chains (every ``parent[i]`` is ``i - 1`` or ``-1``: COBRA and the box),
 the RNEA recursions are cumulative sums when everything is written in world coordinates
-(Featherstone's "world-frame" form, [RBDA] sec. 5.? "a version in base coordinates")::
+(the world-coordinate form of the recursions, [RBDA] ch. 5)::
 
     V_i = sum_{j in anc(i)} S_j qd_j                       # spatial velocities (world)
     A_i = A_0 + sum_{j in anc(i)} (S_j qdd_j + c_j),  c_j = V_j x S_j qd_j  (revolute)
@@ -26,6 +26,7 @@ import numpy as np
 
 from .model import Model, ModelError
 from .quaternion import quat_to_rot
+from .spatial import skew
 
 _AXIS = {"Rx": 0, "Ry": 1, "Rz": 2}
 
@@ -137,7 +138,7 @@ class ChainModel:
             v_w, w_b = qd[iv][:3], qd[iv][3:]
             S[3:, iv.start:iv.start + 3] = np.eye(3)
             S[:3, iv.start + 3:iv.stop] = R[i]
-            S[3:, iv.start + 3:iv.stop] = _skew(p[i]) @ R[i]
+            S[3:, iv.start + 3:iv.stop] = skew(p[i]) @ R[i]
             # the free joint's velocity-product term in world coordinates: [0; -w_world x v_world]
             free_dofs.extend(range(iv.start, iv.stop))
             c = np.zeros((6, 6))
@@ -182,12 +183,8 @@ class ChainModel:
         start = self.model.v_idx[self.root[body]].start
         stop = self.last_dof[body] + 1
         J = np.zeros((3, self.model.nv))
-        J[:, start:stop] = terms.S[3:, start:stop] - _skew(x) @ terms.S[:3, start:stop]
+        J[:, start:stop] = terms.S[3:, start:stop] - skew(x) @ terms.S[:3, start:stop]
         return J
-
-
-def _skew(w):
-    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
 def _skew_batch(w):

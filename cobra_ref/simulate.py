@@ -136,7 +136,7 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
     stepper = Stepper(model, settings)
     _check_start(stepper, q, qd)
     n_steps = int(round(duration / settings.dt))
-    log = _Log(model, n_steps, settings.dt)
+    log = _Log(model, n_steps, settings.dt, n_joints=len(stepper.act))
     log.add_state(0.0, q, qd)
     start = time.perf_counter()
     for k in range(n_steps):
@@ -173,12 +173,12 @@ def _check_start(stepper: Stepper, q, qd) -> None:
 class _Log:
     """Preallocated per-step arrays and a growing contact log."""
 
-    def __init__(self, model: Model, n_steps: int, dt: float):
+    def __init__(self, model: Model, n_steps: int, dt: float, n_joints: int = N_JOINTS):
         self.model, self.dt, self.n = model, dt, 0
         self.t = np.zeros(n_steps + 1)
         self.q = np.zeros((n_steps + 1, model.nq))
         self.qd = np.zeros((n_steps + 1, model.nv))
-        self.tau = np.zeros((n_steps, N_JOINTS))
+        self.tau = np.zeros((n_steps, n_joints))
         self.steps = {k: np.zeros(n_steps) for k in STEP_KEYS}
         self.contact_rows = {k: [] for k in CONTACT_KEYS}
         self.box = model.q_idx[model.boxes[0].body] if model.boxes else None
@@ -195,8 +195,8 @@ class _Log:
         s["stick_residual"][k], s["cond_G"][k] = info.stick_slip_residual, info.cond_G
         s["max_penetration"][k] = max(0.0, -float(cs.g.min())) if cs.m else 0.0
         s["n_contacts"][k] = cs.m
-        s["tau_excess"][k] = float(np.max(np.abs(res.tau) - stepper.tau_max))
-        s["q_excess"][k] = float(np.max(np.abs(res.q[stepper.act_q]) - stepper.q_max))
+        s["tau_excess"][k] = float(np.max(np.abs(res.tau) - stepper.tau_max, initial=-np.inf))
+        s["q_excess"][k] = float(np.max(np.abs(res.q[stepper.act_q]) - stepper.q_max, initial=-np.inf))
         s["kinetic"][k], s["potential"][k] = res.kinetic, res.potential
         s["work_actuators"][k], s["work_contacts"][k] = res.work_actuators, res.work_contacts
         self.tau[k] = res.tau

@@ -85,11 +85,12 @@ class Stepper:
         self.model, self.s = model, settings
         self.chain = ChainModel(model)
         self.qp = ContactQP(model.mu, settings.n_facets, settings.reg, friction=settings.friction)
-        self.act = np.concatenate([np.arange(model.v_idx[i].start, model.v_idx[i].stop)
-                                   for i, jt in enumerate(model.joint_type) if jt != "free"])
-        self.act_q = np.array([model.q_idx[i].start for i, jt in enumerate(model.joint_type) if jt != "free"])
-        self.tau_max = np.array([model.tau_limit[i] for i, jt in enumerate(model.joint_type) if jt != "free"])
-        self.q_max = np.array([model.q_limit[i] for i, jt in enumerate(model.joint_type) if jt != "free"])
+        # actuated = revolute joints (one dof each); a model may have none (a lone ball or box)
+        revolute = [i for i, jt in enumerate(model.joint_type) if jt != "free"]
+        self.act = np.array([model.v_idx[i].start for i in revolute], dtype=int)
+        self.act_q = np.array([model.q_idx[i].start for i in revolute], dtype=int)
+        self.tau_max = np.array([model.tau_limit[i] for i in revolute], dtype=float)
+        self.q_max = np.array([model.q_limit[i] for i in revolute], dtype=float)
         prescribed = settings.servo == "prescribed"
         self.free = np.setdiff1d(np.arange(model.nv), self.act) if prescribed else np.arange(model.nv)
         self._warm: dict = {}
