@@ -97,7 +97,7 @@ class Trajectory:
 def initial_state(model: Model, reference, box_offset=(0.0, -0.12), clearance: float = 1e-3):
     """Robot at rest in the reference's t = 0 shape, head at the origin facing +x, lowest sphere
     ``clearance`` above the ground; the box resting on the ground with its centre at
-    ``box_offset`` = (dx, dy) from the middle link's centre (L5-L6 region; assumption C9).
+    ``box_offset`` = (dx, dy) from the centre of L5, next to the middle of the snake (assumption C9).
 
     The default dy = -0.12 m puts the box 12 mm from the side of the middle link
     (0.0535 + 0.05 + 0.0165 m) on the side the built-in rolling gait moves towards (-y).
@@ -113,7 +113,7 @@ def initial_state(model: Model, reference, box_offset=(0.0, -0.12), clearance: f
     q[2] = clearance - min(bottoms)
     if model.boxes:
         box = model.boxes[0]
-        mid = len(model.body_names) // 2 - 1  # the middle link of the robot (L6 for COBRA)
+        mid = len(model.body_names) // 2 - 1  # body 5 = L5 for COBRA (13 bodies with the box)
         centre = kin.p[mid] + kin.R[mid] @ model.com[mid]
         iq = model.q_idx[box.body]
         q[iq.start:iq.start + 3] = [centre[0] + box_offset[0], centre[1] + box_offset[1], box.half[2]]
