@@ -77,7 +77,7 @@ class ChainModel:
     def terms(self, q, qd) -> ChainTerms:
         """R, p, S, V, M and h at (q, qd): the same numbers as forward_kinematics, crba, bias_force."""
         R, p = self._poses(q)
-        S, c_free = self._motion_subspace(R, p, q, qd)
+        S, c_free = self._motion_subspace(R, p, qd)
         # V_i = cumulative sum of S_k qd_k within each chain, read at each body's last dof
         Sqd = S * qd
         V = self._chain_cumsum(Sqd.T)[self.last_dof]
@@ -123,7 +123,7 @@ class ChainModel:
                 n += 1
         return R, p
 
-    def _motion_subspace(self, R, p, q, qd):
+    def _motion_subspace(self, R, p, qd):
         """World motion subspace S (6, nv) and the free joints' velocity-product terms."""
         model = self.model
         S = np.zeros((6, model.nv))

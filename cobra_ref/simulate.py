@@ -31,7 +31,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .contact import KINDS, find_contacts
 from .contact_qp import ContactSolveError
+from .kinematics import forward_kinematics
 from .model import Model
 from .reference import N_JOINTS
 from .robots import neutral_q
@@ -102,8 +104,6 @@ def initial_state(model: Model, reference, box_offset=(0.0, -0.12), clearance: f
     The default dy = -0.12 m puts the box 12 mm from the side of the middle link
     (0.0535 + 0.05 + 0.0165 m) on the side the built-in rolling gait moves towards (-y).
     """
-    from .kinematics import forward_kinematics
-
     q = neutral_q(model)
     act_q = [model.q_idx[i].start for i, jt in enumerate(model.joint_type) if jt != "free"]
     q[act_q] = reference(0.0)[0]
@@ -159,8 +159,6 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
 
 def _check_start(stepper: Stepper, q, qd) -> None:
     terms = stepper.chain.terms(q, qd)
-    from .contact import KINDS, find_contacts
-
     contacts = find_contacts(stepper.model, terms, 0.0)
     if contacts.m and contacts.g.min() < -stepper.s.max_start_penetration:
         k = int(np.argmin(contacts.g))

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+from scipy.linalg import solve_triangular
 
 from .contact import Contacts, contact_jacobian, find_contacts
 from .contact_qp import ContactQP, QPInfo
@@ -93,6 +94,7 @@ class Stepper:
         self.q_max = np.array([model.q_limit[i] for i in revolute], dtype=float)
         prescribed = settings.servo == "prescribed"
         self.free = np.setdiff1d(np.arange(model.nv), self.act) if prescribed else np.arange(model.nv)
+        self.prescribed = np.setdiff1d(np.arange(model.nv), self.free)
         self._warm: dict = {}
         self._hint: dict = {}
 
@@ -111,7 +113,7 @@ class Stepper:
             tau_pd = s.kp * (q_ref - q[self.act_q]) + s.kd * (qd_ref - qd[self.act])
             tau[self.act] = np.clip(tau_pd, -self.tau_max, self.tau_max)
         # Step 2: eq. (1) without contact for the free coordinates F
-        F, P = self.free, np.setdiff1d(np.arange(model.nv), self.free)
+        F, P = self.free, self.prescribed
         M_FF = M[np.ix_(F, F)]
         rhs = dt * (tau[F] - h[F]) - M[np.ix_(F, P)] @ (qd_next[P] - qd[P])
         L = np.linalg.cholesky(M_FF)
@@ -163,7 +165,5 @@ class Stepper:
 
 def _chol_solve(L: np.ndarray, B: np.ndarray) -> np.ndarray:
     """Solve (L L^T) X = B."""
-    from scipy.linalg import solve_triangular
-
     Y = solve_triangular(L, B, lower=True, check_finite=False)
     return solve_triangular(L.T, Y, lower=False, check_finite=False)
