@@ -75,10 +75,10 @@ def facet_directions(n_facets: int) -> np.ndarray:
     return np.stack([np.cos(angles), np.sin(angles)], axis=1)
 
 
-def _constraint_matrix(m: int, D: np.ndarray, mu: float | None) -> sparse.csc_matrix:
+def _constraint_matrix(m: int, D: np.ndarray, mu=None) -> sparse.csc_matrix:
     """Rows: p_N,i for every contact, then one row per contact and facet pair.
 
-    ``mu`` given (convex cone): rows mu p_N - d.p_T and mu p_N + d.p_T (both >= 0).
+    ``mu`` given, (m,) (convex cone): rows mu_i p_N - d.p_T and mu_i p_N + d.p_T (both >= 0).
     ``mu`` None (fixed point): rows d.p_T, bounded by +-mu pbar_N through l and u.
     """
     rows, cols, vals = list(range(m)), [3 * i for i in range(m)], [1.0] * m
@@ -92,7 +92,7 @@ def _constraint_matrix(m: int, D: np.ndarray, mu: float | None) -> sparse.csc_ma
                 if mu is not None:
                     rows.append(r)
                     cols.append(3 * i)
-                    vals.append(mu)
+                    vals.append(mu[i])
                 r += 1
     return sparse.csc_matrix((vals, (rows, cols)), shape=(r, 3 * m))
 
@@ -124,36 +124,46 @@ class ContactQP:
         self.eps, self.fp_tol, self.fp_max, self.max_iter = eps, fp_tol, fp_max, max_iter
         self._solvers: dict = {}
 
-    def solve(self, G: np.ndarray, c: np.ndarray, p_warm: np.ndarray | None = None):
-        """Impulses p (3m,) ordered [p_N, p_t1, p_t2] per contact, and a QPInfo."""
+    def solve(self, G: np.ndarray, c: np.ndarray, p_warm: np.ndarray | None = None, mu=None):
+        """Impulses p (3m,) ordered [p_N, p_t1, p_t2] per contact, and a QPInfo.
+
+        ``mu``: a friction coefficient per contact (m,), or None for the solver's ``mu``.
+        """
         m = len(c) // 3
         if m == 0:
             return np.zeros(0), QPInfo("solved", 0, 0, 0.0, 0.0, 0.0, 1.0)
+        mu = np.full(m, self.mu) if mu is None else np.broadcast_to(np.asarray(mu, dtype=float), (m,))
+        if not (np.all(np.isfinite(mu)) and np.all(mu >= 0)):
+            raise ValueError(f"friction coefficients must be finite and >= 0, got {mu}")
         # eq. (6) with a small uniform regularization eps I (module docstring)
         P = G + self.reg * max(np.mean(np.diag(G)), 1e-300) * np.eye(3 * m)
         p0 = np.zeros(3 * m) if p_warm is None else np.asarray(p_warm, dtype=float).copy()
         status, iters, fp = "solved", 0, 1
         if self.friction == "fixed-point":
-            p, iters, fp, ok, inaccurate = self._fixed_point(P, c, p0)
+            p, iters, fp, ok, inaccurate = self._fixed_point(P, c, p0, mu)
             if not ok:
                 status = "solved (fixed point not converged; friction clipped)"
-                p = self._clip_friction(p)
+                p = self._clip_friction(p, mu)
         else:
-            solver = self._solver(m, P, c, convex=True)
+            solver = self._solver(m, P, c, convex=mu)
             n_rows = m * (1 + 2 * len(self.D))
             p, it, inaccurate = self._run(solver, m, p0, np.zeros(n_rows), np.full(n_rows, np.inf))
             iters += it
         if inaccurate and status == "solved":
             status = "solved inaccurate"
-        info = QPInfo(status, iters, fp, *kkt_residuals(G, c, p, self.mu, self.D), cond_G=_cond(P))
+        info = QPInfo(status, iters, fp, *kkt_residuals(G, c, p, mu, self.D), cond_G=_cond(P))
         return p, info
 
-    def _solver(self, m, P, c, convex: bool):
-        """An OSQP instance for m contacts: set up once per (m, kind), then only updated."""
-        key = (m, convex)
+    def _solver(self, m, P, c, convex=None):
+        """An OSQP instance for m contacts: set up once per (m, kind), then only updated.
+
+        ``convex``: None for the fixed-point form, else the (m,) friction coefficients that
+        enter the convex cone's constraint matrix.
+        """
+        key = (m, None if convex is None else tuple(convex))
         Px = _upper_dense_csc(P)
         if key not in self._solvers:
-            A = _constraint_matrix(m, self.D, self.mu if convex else None)
+            A = _constraint_matrix(m, self.D, convex)
             solver = osqp.OSQP()
             solver.setup(P=Px, q=c, A=A, l=np.zeros(A.shape[0]), u=np.full(A.shape[0], np.inf),
                          eps_abs=self.eps, eps_rel=self.eps, polishing=True, verbose=False,
@@ -182,14 +192,14 @@ class ContactQP:
                                     f"(m = {m} contacts)")
         return res.x, iters, res.info.status != "solved"
 
-    def _fixed_point(self, P, c, p):
+    def _fixed_point(self, P, c, p, mu):
         """Friction bounded by mu pbar_N of the previous iterate, until p_N stops changing."""
         m = len(c) // 3
-        solver = self._solver(m, P, c, convex=False)
+        solver = self._solver(m, P, c)
         pbar_N = np.maximum(p[0::3], 0.0)
         total, inaccurate, damped, last_change = 0, False, False, np.inf
         for fp in range(1, self.fp_max + 1):
-            bound = np.repeat(self.mu * pbar_N, len(self.D))
+            bound = np.repeat(mu * pbar_N, len(self.D))
             l = np.concatenate([np.zeros(m), -bound])
             u = np.concatenate([np.full(m, np.inf), bound])
             p, it, bad = self._run(solver, m, p, l, u)
@@ -204,34 +214,36 @@ class ContactQP:
             last_change = change
         return p, total, self.fp_max, False, inaccurate
 
-    def _clip_friction(self, p):
+    def _clip_friction(self, p, mu):
         """Scale each p_T into the pyramid of its own p_N: max_k |d_k . p_T| <= mu p_N."""
         p = p.copy()
         p_N = np.maximum(p[0::3], 0.0)
         p_T = np.stack([p[1::3], p[2::3]], axis=1)
         worst = np.max(np.abs(p_T @ self.D.T), axis=1)
-        scale = np.where(worst > self.mu * p_N, self.mu * p_N / np.maximum(worst, 1e-300), 1.0)
+        scale = np.where(worst > mu * p_N, mu * p_N / np.maximum(worst, 1e-300), 1.0)
         p[0::3], p[1::3], p[2::3] = p_N, p_T[:, 0] * scale, p_T[:, 1] * scale
         return p
 
 
-def kkt_residuals(G: np.ndarray, c: np.ndarray, p: np.ndarray, mu: float, D: np.ndarray):
+def kkt_residuals(G: np.ndarray, c: np.ndarray, p: np.ndarray, mu, D: np.ndarray):
     """Complementarity, cone and stick residuals of p for the velocity-level eq. (2).
 
     Implements: the optimality (KKT) conditions of [COBRA] eq. (6) = eq. (2) at velocity level.
 
     w = G p + c. Returns (max |p_N w_N|, relative cone violation, max |w_T| among contacts
-    whose tangential impulse is strictly inside the pyramid).
+    whose tangential impulse is strictly inside the pyramid). ``mu``: scalar or one per contact.
     """
     w = G @ p + c
     p_N, w_N = p[0::3], w[0::3]
+    mu = np.broadcast_to(np.asarray(mu, dtype=float), p_N.shape)
     p_T = np.stack([p[1::3], p[2::3]], axis=1)
     w_T = np.stack([w[1::3], w[2::3]], axis=1)
     comp = float(np.max(np.abs(p_N * w_N))) if len(p_N) else 0.0
     facet = np.abs(p_T @ D.T)  # (m, K/2)
     scale = max(float(p_N.max()), 1e-12) if len(p_N) else 1.0
-    cone = float(max(0.0, np.max(facet - mu * p_N[:, None])) / scale) if len(p_N) else 0.0
-    inside = np.all(facet < mu * p_N[:, None] * (1 - 1e-6), axis=1) & (p_N > 1e-9 * scale)
+    bound = (mu * p_N)[:, None]
+    cone = float(max(0.0, np.max(facet - bound)) / scale) if len(p_N) else 0.0
+    inside = np.all(facet < bound * (1 - 1e-6), axis=1) & (p_N > 1e-9 * scale)
     stick = float(np.max(np.linalg.norm(w_T[inside], axis=1))) if inside.any() else 0.0
     return comp, cone, stick
 

@@ -74,7 +74,8 @@ class Model:
     boxes: tuple[BoxGeom, ...] = ()
     # body cylinders for pictures and the MJCF's visual geoms: (length, radius, x offset) per body
     visual_cylinders: tuple[tuple[float, float, float] | None, ...] = ()
-    mu: float = 1.0
+    mu: float = 1.0  # Coulomb friction of robot-ground and box-ground contacts
+    mu_robot_box: float | None = None  # robot-box contacts; None = the same as mu
     # derived in __post_init__
     X_tree: tuple[np.ndarray, ...] = field(init=False)
     I: tuple[np.ndarray, ...] = field(init=False)
@@ -159,6 +160,10 @@ def _validate(model: Model) -> None:
     for name in per_body:
         if len(getattr(model, name)) != nb:
             raise ModelError(f"{name} has {len(getattr(model, name))} entries, expected {nb} (one per body)")
+    for name in ("mu", "mu_robot_box"):
+        value = getattr(model, name)
+        if value is not None and not (np.isfinite(value) and value >= 0):
+            raise ModelError(f"{name} must be finite and >= 0, got {value}")
     for i in range(nb):
         who = f"body {i} ({model.body_names[i]!r})"
         if not -1 <= model.parent[i] < i:

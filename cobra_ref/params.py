@@ -59,6 +59,7 @@ class CobraParameters:
     # --- environment and contact --------------------------------------------------------------
     gravity: float = 9.81
     mu: float = 1.0
+    mu_robot_box: float = 0.5
     mu_static: float = 1.3
     # --- the paper's compliant-contact settings, kept for the record (not used by the hard model)
     paper_contact_stiffness: float = 1e-4
@@ -104,6 +105,8 @@ SOURCES: dict[str, str] = {
     "box_mass": "paper: 'solid box of weight 0.5 kg'",
     "gravity": "assumption C20: 9.81 m/s^2, flat ground z = 0",
     "mu": "paper: dynamic friction coefficient 1.0 (single mu of the hard model, notes C13)",
+    "mu_robot_box": "assumption C22: 0.5 (paper: one mu for all pairs); with mu = 1 a rolling link "
+                    "wedges the box into the ground (README 'Pushing the box')",
     "mu_static": "paper: static friction coefficient 1.3 (compliant models only)",
     "paper_contact_stiffness": "paper (typo): '1e-4 N/m'; compliant reading 1e6 N/m (notes B4, C12)",
     "paper_contact_damping": "paper: 1e3 N s/m (compliant models only)",
@@ -117,7 +120,7 @@ UNITS: dict[str, str] = {
     "length_head": "m", "radius_head": "m", "length_link": "m", "radius_link": "m",
     "length_tail": "m", "radius_tail": "m", "joint_gap": "m", "q_max": "rad",
     "tau_max": "N m", "qd_max": "rad/s", "box_size": "m", "box_mass": "kg",
-    "gravity": "m/s^2", "mu": "-", "mu_static": "-", "paper_contact_stiffness": "N/m",
+    "gravity": "m/s^2", "mu": "-", "mu_robot_box": "-", "mu_static": "-", "paper_contact_stiffness": "N/m",
     "paper_contact_damping": "N s/m", "paper_v_crit": "m/s", "paper_dt": "s",
 }
 

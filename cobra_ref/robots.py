@@ -112,6 +112,7 @@ def cobra_model(params: CobraParameters | None = None, with_box: bool = True) ->
         boxes=boxes,
         visual_cylinders=tuple(visual),
         mu=p.mu,
+        mu_robot_box=p.mu_robot_box,
     )
 
 

@@ -28,7 +28,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg import solve_triangular
 
-from .contact import Contacts, contact_jacobian, find_contacts
+from .contact import ROBOT_BOX, Contacts, contact_jacobian, find_contacts
 from .contact_qp import ContactQP, QPInfo
 from .fastdyn import ChainModel
 from .kinematics import integrate
@@ -129,7 +129,7 @@ class Stepper:
         # Step 4: least action, eq. (6)
         keys = contacts.keys()
         p_warm = np.concatenate([self._warm.get(k, np.zeros(3)) for k in keys]) if keys else None
-        p, info = self.qp.solve(G, c, p_warm)
+        p, info = self.qp.solve(G, c, p_warm, mu=self._mu(contacts))
         qd_next[F] += Minv_JT @ p
         w = J @ qd_next
         # Step 5: joint torques from eq. (1) with the contact impulses (prescribed servo)
@@ -145,6 +145,11 @@ class Stepper:
         q_next = integrate(model, q, qd_next, dt)
         return StepResult(q_next, qd_next, tau[self.act], contacts, p, w, info, kinetic, potential,
                           work_actuators, work_contacts)
+
+    def _mu(self, contacts: Contacts) -> np.ndarray:
+        """Friction coefficient per contact: model.mu, or model.mu_robot_box for robot-box pairs."""
+        mu_rb = self.model.mu if self.model.mu_robot_box is None else self.model.mu_robot_box
+        return np.where(contacts.kind == ROBOT_BOX, mu_rb, self.model.mu)
 
     def _remember(self, keys, p, w, contacts):
         """Warm starts and the sliding directions for the next step's contact frames."""
