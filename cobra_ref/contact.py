@@ -53,51 +53,43 @@ class Contacts(NamedTuple):
 def find_contacts(model, terms: ChainTerms, margin: float, t_hint: dict | None = None) -> Contacts:
     """All candidate contacts with gap < margin, in a fixed order (ground, box, box corners).
 
-    Implements: the active set of [COBRA] eq. (2): contacts whose gap g_i is (nearly) closed.
+    Implements: the active set of [COBRA] eq. (2): contacts whose gap g_i is (nearly) closed,
+    with the gap functions of :mod:`cobra_ref.gaps` in their batched forms.
 
     ``t_hint`` maps a contact key to a tangent direction (the previous sliding direction), so
     that t1 follows the slip and the friction pyramid is exact along it.
     """
-    t_hint = t_hint or {}
-    rows = []
     sph = model.spheres
     centers = terms.p[sph.body] + np.einsum("sij,sj->si", terms.R[sph.body], sph.center)
-    for s in np.flatnonzero(centers[:, 2] - sph.radius < margin):
-        key = (ROBOT_GROUND, int(sph.body[s]), int(s))
-        rows.append((key, -1, gapfn.sphere_plane_gap(centers[s], sph.radius[s], t_hint.get(key))))
+    # robot spheres on the ground: g = c_z - r, n = e_z (gaps.sphere_plane_gap)
+    s = np.flatnonzero(centers[:, 2] - sph.radius < margin)
+    parts = [(ROBOT_GROUND, sph.body[s], np.full(len(s), -1), s, centers[s, 2] - sph.radius[s],
+              np.tile(gapfn.e_z, (len(s), 1)), centers[s] - sph.radius[s, None] * gapfn.e_z,
+              centers[s] * [1.0, 1.0, 0.0])]
     for box in model.boxes:
         R_b, p_b = terms.R[box.body], terms.p[box.body]
-        # cheap bounding-sphere test first: |c - p_box| - r < margin + half-diagonal
-        near = np.linalg.norm(centers - p_b, axis=1) - sph.radius < margin + np.linalg.norm(box.half)
-        for s in np.flatnonzero(near):
-            key = (ROBOT_BOX, int(sph.body[s]), int(s))
-            gap = gapfn.sphere_box_gap(centers[s], sph.radius[s], R_b, p_b, box.half, t_hint.get(key))
-            if gap.g < margin:
-                rows.append((key, box.body, gap))
-        for k, gap in enumerate(gapfn.box_corner_plane_gaps(R_b, p_b, box.half)):
-            key = (BOX_GROUND, box.body, k)
-            if gap.g < margin:
-                if key in t_hint:
-                    gap = gap._replace(frame=gapfn.contact_frame(gap.n, t_hint[key]))
-                rows.append((key, -1, gap))
-    return _stack(rows)
-
-
-def _stack(rows) -> Contacts:
-    if not rows:
-        z = np.zeros(0)
-        return Contacts(z.astype(int), z.astype(int), z.astype(int), z.astype(int), z, np.zeros((0, 3, 3)),
-                        np.zeros((0, 3)), np.zeros((0, 3)))
-    return Contacts(
-        kind=np.array([r[0][0] for r in rows], dtype=int),
-        body_A=np.array([r[0][1] for r in rows], dtype=int),
-        body_B=np.array([r[1] for r in rows], dtype=int),
-        feature=np.array([r[0][2] for r in rows], dtype=int),
-        g=np.array([r[2].g for r in rows]),
-        frame=np.array([r[2].frame for r in rows]),
-        point_A=np.array([r[2].point_A for r in rows]),
-        point_B=np.array([r[2].point_B for r in rows]),
-    )
+        # robot spheres on the box (gaps.sphere_box_gap), after a cheap bounding-sphere test
+        near = np.flatnonzero(np.linalg.norm(centers - p_b, axis=1) - sph.radius
+                              < margin + np.linalg.norm(box.half))
+        g, n, point_A, point_B = gapfn.sphere_box_gaps(centers[near], sph.radius[near], R_b, p_b, box.half)
+        k = g < margin
+        parts.append((ROBOT_BOX, sph.body[near[k]], np.full(k.sum(), box.body), near[k], g[k], n[k],
+                      point_A[k], point_B[k]))
+        # box corners on the ground: g = x_z (gaps.box_corner_plane_gaps)
+        corners = gapfn.box_corners(R_b, p_b, box.half)
+        k = np.flatnonzero(corners[:, 2] < margin)
+        parts.append((BOX_GROUND, np.full(len(k), box.body), np.full(len(k), -1), k, corners[k, 2],
+                      np.tile(gapfn.e_z, (len(k), 1)), corners[k], corners[k] * [1.0, 1.0, 0.0]))
+    kind = np.concatenate([np.full(len(p[3]), p[0]) for p in parts]).astype(int)
+    body_A, body_B, feature = (np.concatenate([p[i] for p in parts]).astype(int) for i in (1, 2, 3))
+    g, n, point_A, point_B = (np.concatenate([p[i] for p in parts]) for i in (4, 5, 6, 7))
+    hints = np.full((len(g), 3), np.nan)
+    if t_hint:
+        for i, key in enumerate(zip(kind.tolist(), body_A.tolist(), feature.tolist())):
+            if key in t_hint:
+                hints[i] = t_hint[key]
+    return Contacts(kind, body_A, body_B, feature, g.astype(float), gapfn.contact_frames(n, hints),
+                    point_A, point_B)
 
 
 def contact_jacobian(chain: ChainModel, terms: ChainTerms, contacts: Contacts) -> np.ndarray:
@@ -105,11 +97,24 @@ def contact_jacobian(chain: ChainModel, terms: ChainTerms, contacts: Contacts) -
 
     Implements: [COBRA] eq. (3)-(4), g' = J_c u, with W_i^T = n_i^T (J_A - J_B) the gap's
     gradient (checked against finite differences of the gap functions in the tests).
+
+    Every body point's Jacobian is J(x) = S_lin - x × S_ang over the dofs that move the body
+    (``ChainModel.point_jacobian``); here all contacts at once.
     """
-    J = np.zeros((3 * contacts.m, chain.model.nv))
-    for k in range(contacts.m):
-        J_rel = chain.point_jacobian(terms, contacts.body_A[k], contacts.point_A[k])
-        if contacts.body_B[k] >= 0:
-            J_rel = J_rel - chain.point_jacobian(terms, contacts.body_B[k], contacts.point_B[k])
-        J[3 * k:3 * k + 3] = contacts.frame[k].T @ J_rel
-    return J
+    J_rel = _point_jacobians(chain, terms, contacts.body_A, contacts.point_A)
+    on_body = contacts.body_B >= 0
+    if on_body.any():
+        J_rel[on_body] -= _point_jacobians(chain, terms, contacts.body_B[on_body], contacts.point_B[on_body])
+    # rows n^T J, t1^T J, t2^T J of each contact
+    return np.einsum("kij,kin->kjn", contacts.frame, J_rel).reshape(3 * contacts.m, chain.model.nv)
+
+
+def _point_jacobians(chain: ChainModel, terms: ChainTerms, body: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """(k, 3, nv) world Jacobians of the body-fixed points at world positions x (k, 3)."""
+    S_ang, S_lin = terms.S[:3].T, terms.S[3:].T  # (nv, 3)
+    xs = x[:, None, :]
+    cross = np.stack([xs[..., 1] * S_ang[..., 2] - xs[..., 2] * S_ang[..., 1],
+                      xs[..., 2] * S_ang[..., 0] - xs[..., 0] * S_ang[..., 2],
+                      xs[..., 0] * S_ang[..., 1] - xs[..., 1] * S_ang[..., 0]], axis=-1)  # (k, nv, 3)
+    J = (S_lin[None] - cross) * chain.moves[body][:, :, None]
+    return J.transpose(0, 2, 1)

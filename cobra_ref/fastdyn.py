@@ -57,6 +57,10 @@ class ChainModel:
                 self.root[i] = self.root[i - 1]
         self.dof_body = np.concatenate([[i] * (s.stop - s.start) for i, s in enumerate(model.v_idx)]).astype(int)
         self.last_dof = np.array([s.stop - 1 for s in model.v_idx])
+        # moves[b, k]: dof k moves body b (k in the range from b's chain root to b's own last dof)
+        self.moves = np.zeros((nb, model.nv))
+        for b in range(nb):
+            self.moves[b, model.v_idx[self.root[b]].start:self.last_dof[b] + 1] = 1.0
         # same_chain[k, l]: dofs k and l belong to the same chain (else M[k, l] = 0)
         root_of_dof = self.root[self.dof_body]
         self.same_chain = root_of_dof[:, None] == root_of_dof[None, :]

@@ -22,6 +22,7 @@ Servo (notes C7; Eq. (6) constraints (2)-(3)):
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -33,6 +34,10 @@ from .contact_qp import ContactQP, QPInfo
 from .fastdyn import ChainModel
 from .kinematics import integrate
 from .model import Model
+
+
+# the phases of a step, timed for ``cobra-ref bench``
+PHASES = ("dynamics", "contacts", "qp", "rest")
 
 
 class SimulationError(RuntimeError):
@@ -54,6 +59,7 @@ class StepSettings:
     n_facets: int = 4
     friction: str = "fixed-point"  # or "convex" (contact_qp module docstring)
     reg: float = 1e-6
+    fp_max: int = 10  # friction fixed-point iterates per step (warm-started; contact_qp docstring)
     margin: float = 0.01  # candidate contacts within 10 mm
     beta: float = 0.2  # fraction of a penetration removed per step
     max_start_penetration: float = 0.005
@@ -85,7 +91,8 @@ class Stepper:
     def __init__(self, model: Model, settings: StepSettings = StepSettings()):
         self.model, self.s = model, settings
         self.chain = ChainModel(model)
-        self.qp = ContactQP(model.mu, settings.n_facets, settings.reg, friction=settings.friction)
+        self.qp = ContactQP(model.mu, settings.n_facets, settings.reg, friction=settings.friction,
+                            fp_max=settings.fp_max)
         # actuated = revolute joints (one dof each); a model may have none (a lone ball or box)
         revolute = [i for i, jt in enumerate(model.joint_type) if jt != "free"]
         self.act = np.array([model.v_idx[i].start for i in revolute], dtype=int)
@@ -97,9 +104,11 @@ class Stepper:
         self.prescribed = np.setdiff1d(np.arange(model.nv), self.free)
         self._warm: dict = {}
         self._hint: dict = {}
+        self.timing = dict.fromkeys(PHASES, 0.0)  # seconds spent in each phase, summed over steps
 
     def step(self, q: np.ndarray, qd: np.ndarray, t: float, reference) -> StepResult:
         s, model, dt = self.s, self.model, self.s.dt
+        clock = [time.perf_counter()]
         terms = self.chain.terms(q, qd)
         M, h = terms.M, terms.h
         # Step 1: actuation -- prescribed joint velocities, or PD torques
@@ -118,6 +127,7 @@ class Stepper:
         rhs = dt * (tau[F] - h[F]) - M[np.ix_(F, P)] @ (qd_next[P] - qd[P])
         L = np.linalg.cholesky(M_FF)
         qd_next[F] = qd[F] + _chol_solve(L, rhs)
+        clock.append(time.perf_counter())
         # Step 3: contacts, J_c (eq. 3-4), Delassus G and free velocity c (eq. 5)
         contacts = find_contacts(model, terms, s.margin, self._hint)
         J = contact_jacobian(self.chain, terms, contacts)
@@ -126,10 +136,12 @@ class Stepper:
         c = J @ qd_next
         g_stab = np.where(contacts.g >= 0, contacts.g, s.beta * contacts.g)
         c[0::3] += g_stab / dt
+        clock.append(time.perf_counter())
         # Step 4: least action, eq. (6)
         keys = contacts.keys()
         p_warm = np.concatenate([self._warm.get(k, np.zeros(3)) for k in keys]) if keys else None
         p, info = self.qp.solve(G, c, p_warm, mu=self._mu(contacts))
+        clock.append(time.perf_counter())
         qd_next[F] += Minv_JT @ p
         w = J @ qd_next
         # Step 5: joint torques from eq. (1) with the contact impulses (prescribed servo)
@@ -143,6 +155,9 @@ class Stepper:
         kinetic = 0.5 * qd @ M @ qd
         potential = self._potential(terms)
         q_next = integrate(model, q, qd_next, dt)
+        clock.append(time.perf_counter())
+        for phase, t0, t1 in zip(PHASES, clock[:-1], clock[1:]):
+            self.timing[phase] += t1 - t0
         return StepResult(q_next, qd_next, tau[self.act], contacts, p, w, info, kinetic, potential,
                           work_actuators, work_contacts)
 
