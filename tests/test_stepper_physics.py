@@ -184,11 +184,16 @@ def test_box_sliding_at_1_m_per_s_on_mu_1_stops_after_v0_squared_over_2_mu_g():
     centre of mass (half side a/2 both in height and half-width): N_front - N_rear = mu N,
     so the rear corners carry N (1 - mu) / 2 = 0 and the front ones all of m g dt; the box
     stays flat.
+
+    At that limit the split of p_N between the 4 corners is undetermined, and the friction fixed
+    point needs more than the stepper's default 10 iterates: with fp_max = 50 the discrete
+    solution holds to 1e-5; with the default it is 1e-4 short (measured), still within 2 %.
     """
     mu, v0 = 1.0, 1.0
     model = _box(mu=mu)
     q0, qd0 = _at_rest_on_ground(model, BOX_SIDE / 2, v=(v0, 0.0, 0.0))
-    q, qd, results = _run(model, q0, qd0, 200)
+    q_default = _run(model, q0, qd0, 200)[0]
+    q, qd, results = _run(model, q0, qd0, 200, StepSettings(fp_max=50))
     continuum = v0**2 / (2 * mu * GRAVITY)
     v, x = v0, 0.0
     while v > 0:
@@ -198,6 +203,7 @@ def test_box_sliding_at_1_m_per_s_on_mu_1_stops_after_v0_squared_over_2_mu_g():
     np.testing.assert_allclose(distance, continuum, rtol=0.02)
     np.testing.assert_allclose(distance, x, rtol=1e-5)
     np.testing.assert_allclose(qd[:6], 0.0, atol=1e-9, err_msg="the box has stopped")
+    np.testing.assert_allclose(q_default[0] - q0[0], x, rtol=1e-3)
     np.testing.assert_allclose(q[3:7], [1, 0, 0, 0], atol=1e-9, err_msg="the box stays flat")
     weight_dt = BOX_MASS * GRAVITY * DT
     for k, res in enumerate(results[:90]):  # sliding steps (the box stops at step 102)

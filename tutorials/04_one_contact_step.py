@@ -386,27 +386,47 @@ print("c_N [m/s]:", c[0::3])
 # %% [markdown]
 # **8f. Least action, eq. (6)**, with one friction coefficient per contact: model.mu = 1 on
 # the ground and model.mu_robot_box = 0.5 between the robot and the box (none of the latter
-# are active right now). The `QPInfo` fields are the solver status, the OSQP iterations, the
-# friction fixed-point iterates, and the KKT residuals of section 4. By default
-# (`friction="fixed-point"`) the friction bound is mu times the previous iterate's p_N, and
-# the QP is solved again until p_N stops changing. Started cold (p = 0), as here, the iterates
-# can need many rounds. If they have not converged after `fp_max` iterates, the solver clips
-# each p_T into the pyramid of its own p_N and says so in `status`. Below we also solve with a
-# larger `fp_max` and measure how far the clipped answer is from the converged one. The
-# stepper normally starts each step from the previous step's impulses, and then needs 1 to 3
-# iterates.
+# are active right now). We build the solver exactly as the stepper does, from its
+# `StepSettings`.
+#
+# With `friction="fixed-point"`, the friction bound is mu times the p_N of the previous
+# iterate, and the QP is solved again until p_N stops changing. At convergence this is exact
+# Coulomb friction on the pyramid. The stepper allows at most `fp_max` iterates per step,
+# because it starts each step from the previous step's impulses. If the iterates have not
+# converged by then, the solver clips each p_T into the pyramid of its own p_N, and says so
+# in `status`. Here we start **cold** (p = 0), as a fresh `Stepper` does.
+#
+# The `QPInfo` fields are: the status, the OSQP (ADMM) iterations summed over the iterates,
+# the number of fixed-point iterates, the three KKT residuals of section 4, and cond(G + eps 1).
 
 # %%
+settings = stepper.s
 mu_c = np.where(contacts.kind == ROBOT_BOX, model.mu_robot_box, model.mu)
-print("mu per contact:", mu_c)
-p, info = ContactQP(model.mu).solve(G, c, mu=mu_c)
+qp = ContactQP(model.mu, settings.n_facets, settings.reg, friction=settings.friction, fp_max=settings.fp_max)
+p, info = qp.solve(G, c, mu=mu_c)
+print("mu per contact:", mu_c, f"  fp_max = {settings.fp_max}")
 for field, value in info._asdict().items():
     print(f"  QPInfo.{field:20s} = {value}")
-p_conv, info_conv = ContactQP(model.mu, fp_max=500).solve(G, c, mu=mu_c)
-print(f"with fp_max = 500: {info_conv.status} after {info_conv.fp_iterations} iterates;"
-      f" max |p - p_conv| = {np.abs(p - p_conv).max():.1e} N s (max p = {np.abs(p).max():.4f} N s)")
 
 # %% [markdown]
+# **The converged fixed point.** We let the same fixed point run up to 500 iterates and call
+# its answer p*. This is the exact Coulomb solution on the pyramid, in these contact frames.
+# For comparison, we also print what the stepper that ran the 300 steps reported on its last
+# step. It was warm-started, and its t1 axes followed the slip.
+
+# %%
+p_star, info_star = ContactQP(model.mu, fp_max=500).solve(G, c, mu=mu_c)
+print(f"p*: {info_star.status} after {info_star.fp_iterations} iterates")
+print(f"max |p - p*| = {np.abs(p - p_star).max():.1e} N s  (max p* = {p_star.max():.4f} N s);"
+      f" sum p_N / dt: {p[0::3].sum() / dt:.4f} N vs {p_star[0::3].sum() / dt:.4f} N")
+print(f"running stepper, last settling step: '{res.qp.status}' after {res.qp.fp_iterations} iterate(s)")
+
+# %% [markdown]
+# When the status above says "not converged", the cold step stopped early. Its normal
+# impulses are then close to p*, but a sliding contact may be left with friction a little
+# inside the pyramid. Section 9 measures what that costs in eq. (2). A warm-started stepper
+# that has been running does not have this problem.
+#
 # **8g. Velocity, position and joint torques after the step.**
 # `u+_F = u_free,F + M_FF^-1 J_F^T p`. Positions advance by `integrate` (semi-implicit
 # Euler: q+ = q (+) dt u+). The joint torques that the servos must supply follow from the
@@ -415,7 +435,7 @@ print(f"with fp_max = 500: {info_conv.status} after {info_conv.fp_iterations} it
 # We now compare with `Stepper(model).step` from the same state. We use a **fresh** stepper:
 # the one that ran the 300 steps starts its QP from the previous impulses, and it turns each
 # t1 along the previous slip (section 5). With the pyramid, that changes the friction of the
-# two sliding contacts. A fresh stepper has neither, exactly like our hand-built step.
+# sliding contacts. A fresh stepper has neither, exactly like our hand-built step.
 
 # %%
 u_next = u_free.copy()
@@ -423,7 +443,7 @@ u_next[F] += M_FF_inv_JT @ p
 q_next = cr.integrate(model, q, u_next, dt)
 tau_joints = (M @ (u_next - u) / dt + h - J.T @ p / dt)[P]
 ref_step = Stepper(model).step(q, u, t_settled, ref)
-print("same contacts:", ref_step.contacts.keys() == contacts.keys())
+print("same contacts:", ref_step.contacts.keys() == contacts.keys(), "  stepper status:", ref_step.qp.status)
 print(f"max |p - p_stepper|   = {np.abs(p - ref_step.p).max():.1e} N s")
 print(f"max |u+ - u+_stepper| = {np.abs(u_next - ref_step.qd).max():.1e},"
       f"  max |q+ - q+_stepper| = {np.abs(q_next - ref_step.q).max():.1e}")
@@ -431,10 +451,11 @@ print("joint torques [N m]:", tau_joints, "\n  stepper          :", ref_step.tau
 
 # %% [markdown]
 # ## 9. Reading the impulses
-# Per contact: the normal force p_N / dt, the friction use |p_T| / (mu p_N), and the slip speed
-# |w_T| after the step. Then the checks of section 4, on the real problem. Which sphere carries
-# what is decided by the geometry: the tail sphere is the largest (57 mm radius, against
-# 53.5 mm for the links), so the rigid C-shape rests on it and on two link spheres.
+# We read the converged p*. Per contact: the normal force p_N / dt, the friction use
+# |p_T| / (mu p_N), and the slip speed |w_T| after the step. Then come the checks of
+# section 4, on the real problem. Which sphere carries what is decided by the geometry: the
+# tail sphere is the largest (57 mm radius, against 53.5 mm for the links), so the rigid
+# C-shape rests on it and on two link spheres.
 #
 # Look at the friction use. The gait is ramping up, so the robot's shape changes during the
 # step, and the distances between its three contact points change with it. They cannot all
@@ -443,17 +464,19 @@ print("joint torques [N m]:", tau_joints, "\n  stepper          :", ref_step.tau
 # friction at all.
 
 # %%
-w, comp, cone, stick, slip, inside = velocity_level_eq2(G, c, p, mu_c)
-p_N, p_T, w_T = p[0::3], np.stack([p[1::3], p[2::3]], 1), np.stack([w[1::3], w[2::3]], 1)
+w, comp, cone, stick, slip, inside = velocity_level_eq2(G, c, p_star, mu_c)
+p_N, p_T, w_T = p_star[0::3], np.stack([p_star[1::3], p_star[2::3]], 1), np.stack([w[1::3], w[2::3]], 1)
 active = p_N > 1e-9 * p_N.max()
 state = np.where(~active, "open", np.where(inside, "stick", "slip"))
 for k in np.flatnonzero(active):
     use = np.abs(p_T[k]).max() / (mu_c[k] * p_N[k])                # 1 = on the pyramid
     print(f"  {labels[k]:6s} f_N = {p_N[k] / dt:7.3f} N, |p_T|/(mu p_N) = {use:.3f},"
           f" |w_T| = {1e3 * np.linalg.norm(w_T[k]):.3f} mm/s  -> {state[k]}")
-print(f"eq. (2) residuals numpy: comp {comp:.1e}, cone {cone:.1e}, stick {stick:.1e}, slip {slip:.1e}")
-print("kkt_residuals          :", tuple(float(f"{r:.1e}") for r in kkt_residuals(G, c, p, mu_c, D4)))
-print(f"min p_N = {p_N.min():.1e} N s, min w_N = {w[0::3].min():.1e} m/s")
+print(f"p*, eq. (2) numpy: comp {comp:.1e}, cone {cone:.1e}, stick {stick:.1e}, slip {slip:.1e} m/s")
+print("p*, kkt_residuals: ", tuple(float(f"{r:.1e}") for r in kkt_residuals(G, c, p_star, mu_c, D4)))
+print(f"p*: min p_N = {p_N.min():.1e} N s, min w_N = {w[0::3].min():.1e} m/s")
+print("cold step p, eq. (2) numpy (comp, cone, stick, slip):",
+      tuple(float(f"{r:.1e}") for r in velocity_level_eq2(G, c, p, mu_c)[1:5]))
 
 # %% [markdown]
 # **Total normal force against the weight.** Every contact here is with the ground. The
@@ -470,7 +493,8 @@ print(f"total: {f_N.sum():.3f} N vs weight {weight:.3f} N  (ratio {f_N.sum() / w
 
 # %% [markdown]
 # **PGS on the real problem.** We run PGS on `G + eps 1`, the same matrix that OSQP minimises.
-# The impulses p do **not** agree, because they are not unique (8d): PGS leaves a
+# PGS bounds friction by the current p_N, so it looks for the same Coulomb solution as p*.
+# The impulses do **not** agree, because they are not unique (8d): PGS leaves a
 # self-balancing pattern of tangential impulses on the box corners, with zero resultant. What
 # is unique is what the impulses do: the contact velocities `w = G p + c`, and the generalized
 # impulse `J_F^T p` on the 12 free coordinates (J_F has rank 12). These two must agree.
@@ -479,18 +503,18 @@ print(f"total: {f_N.sum():.3f} N vs weight {weight:.3f} N  (ratio {f_N.sum() / w
 G_reg = G + eps_reg * np.eye(len(c))
 p_pgs = projected_gauss_seidel(G_reg, c, mu_c, n_sweeps=1000)
 w_pgs = G @ p_pgs + c
-print(f"max |p_OSQP - p_PGS|           = {np.abs(p - p_pgs).max():.1e} N s  (not unique)")
-print(f"max |w_OSQP - w_PGS|           = {np.abs(w - w_pgs).max():.1e} m/s")
-print(f"max |J_F^T (p_OSQP - p_PGS)|   = {np.abs(J[:, F].T @ (p - p_pgs)).max():.1e}"
-      f"  (max |J_F^T p| = {np.abs(J[:, F].T @ p).max():.3f})")
+print(f"max |p* - p_PGS|           = {np.abs(p_star - p_pgs).max():.1e} N s  (not unique)")
+print(f"max |w* - w_PGS|           = {np.abs(w - w_pgs).max():.1e} m/s")
+print(f"max |J_F^T (p* - p_PGS)|   = {np.abs(J[:, F].T @ (p_star - p_pgs)).max():.1e}"
+      f"  (max |J_F^T p*| = {np.abs(J[:, F].T @ p_star).max():.3f})")
 print("PGS box-corner tangential impulses [N s]:\n", p_pgs.reshape(-1, 3)[contacts.kind == 2, 1:])
 
 # %% [markdown]
 # ## 10. Pictures
 # Left: total vertical ground force over the first 0.3 s, divided by the weight, on a log
-# scale (free fall on the box alone, touchdown spikes, rocking, rest). Middle: top view of the snake (its contact spheres), the box, and
-# the active contacts, with marker area proportional to the normal force. Right: normal force
-# per candidate contact.
+# scale (free fall on the box alone, touchdown spikes, rocking, rest). Middle: top view of
+# the snake (its contact spheres), the box, and the active contacts of p*, with marker area
+# proportional to the normal force. Right: normal force of p* per candidate contact.
 
 # %%
 fig, (ax_t, ax_top, ax_bar) = plt.subplots(1, 3, figsize=(15, 4.5))
@@ -534,8 +558,11 @@ fig.tight_layout()
 #   same contact velocities and generalized impulses, but different impulses, because G is
 #   singular (rank 12 for 45 rows).
 # * COBRA: the first steps load only the box (the gap term). After settling, the vertical
-#   ground force equals the weight, and the hand-built step reproduces `Stepper.step`
-#   (impulses, u+, q+ and the joint torques).
+#   ground force equals the weight. The hand-built step reproduces a fresh `Stepper.step`
+#   (impulses, u+, q+ and the joint torques), including its solver status. G has rank 12
+#   for 45 rows, and `QPInfo.cond_G` is the condition number of G + eps 1.
+# * The converged fixed point p* satisfies eq. (2) to the solver tolerances. A cold step that
+#   stops after `fp_max` iterates is close to p*, but its friction is only approximately Coulomb.
 
 # %%
 REG = 1e-6
@@ -563,7 +590,8 @@ for c_toy, p_toy in ((c_rest, p_rest), (c_fast, p_fast), (c_slow, p_slow)):
 np.testing.assert_allclose(force_ratio[0], m_box / (m_robot + m_box), rtol=1e-4, err_msg="step 0: box only")
 assert landing > 5, "the robot falls freely for a few steps"
 np.testing.assert_allclose(force_ratio[-1], 1.0, atol=0.01, err_msg="settled: ground carries the weight")
-np.testing.assert_allclose(f_N.sum(), weight, rtol=0.01, err_msg="hand step: total normal force")
+np.testing.assert_allclose(f_N.sum(), weight, rtol=0.01, err_msg="p*: total normal force")
+np.testing.assert_allclose(p[0::3].sum() / dt, weight, rtol=0.01, err_msg="cold step: total normal force")
 np.testing.assert_allclose(box_part, m_box * grav, rtol=1e-3, err_msg="box weight")
 assert rank_G == 12 and G.shape == (3 * n_c, 3 * n_c) and 3 * n_c > 12, "G singular: rank = free DoF"
 np.testing.assert_allclose(info.cond_G, (sv[0] + eps_reg) / eps_reg, rtol=1e-6, err_msg="QPInfo.cond_G")
@@ -575,13 +603,14 @@ np.testing.assert_allclose(q_next, ref_step.q, rtol=0, atol=1e-9, err_msg="q+ vs
 np.testing.assert_allclose(tau_joints, ref_step.tau, rtol=0, atol=1e-3, err_msg="tau vs Stepper.step")
 
 # %%
-tol_w = 10 * (eps_reg * np.abs(p).max() + 1e-7 * (1 + np.abs(c).max()))
-np.testing.assert_allclose([comp, cone, stick], kkt_residuals(G, c, p, mu_c, D4), rtol=1e-9, atol=1e-18,
+tol_w = 10 * (eps_reg * np.abs(p_star).max() + 1e-7 * (1 + np.abs(c).max()))
+assert info_star.status == "solved", info_star.status
+np.testing.assert_allclose([comp, cone, stick], kkt_residuals(G, c, p_star, mu_c, D4), rtol=1e-9, atol=1e-18,
                            err_msg="COBRA: numpy eq. (2) = kkt_residuals")
-assert comp <= tol_w * np.abs(p).max() and cone <= 1e-6 and stick <= tol_w and slip <= tol_w, "eq. (2) on COBRA"
+assert comp <= tol_w * np.abs(p_star).max() and cone <= 1e-6 and max(stick, slip) <= tol_w, "eq. (2) on COBRA"
 assert p_N.min() >= -1e-9 * p_N.max() and w[0::3].min() >= -tol_w, "no pull, no approach"
 np.testing.assert_allclose(w_pgs, w, atol=tol_w, err_msg="PGS vs OSQP: contact velocities")
-np.testing.assert_allclose(J[:, F].T @ p_pgs, J[:, F].T @ p, atol=1e-6 * np.abs(J[:, F].T @ p).max(),
+np.testing.assert_allclose(J[:, F].T @ p_pgs, J[:, F].T @ p_star, atol=1e-6 * np.abs(J[:, F].T @ p_star).max(),
                            err_msg="PGS vs OSQP: generalized impulse")
 print("All one-step contact checks passed.")
 plt.show()
