@@ -3,9 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import dataclasses
+import json
 import os
 import sys
 import tempfile
+import time
 
 import numpy as np
 
@@ -72,6 +76,110 @@ def write_text_atomic(path: str, text: str) -> None:
         raise
 
 
+@contextlib.contextmanager
+def c_stdout_to_stderr():
+    """Send what C libraries print on file descriptor 1 (OSQP's "Polishing not needed ...")
+    to stderr, so that stdout carries only the command's own output (the JSON summary)."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def _progress(label: str):
+    """A progress printer on stderr: label, percentage, simulated time, time left."""
+    start = time.perf_counter()
+
+    def show(done: int, total: int) -> None:
+        elapsed = time.perf_counter() - start
+        left = elapsed / done * (total - done)
+        sys.stderr.write(f"\r{label}: {100 * done / total:5.1f} % ({done}/{total} steps), "
+                         f"{left:5.0f} s left ")
+        if done == total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+    return show
+
+
+def _check_writable(path: str) -> None:
+    directory = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(directory):
+        raise SystemExit(f"error: output directory does not exist: {directory}")
+    if not os.access(directory, os.W_OK):
+        raise SystemExit(f"error: output directory is not writable: {directory}")
+
+
+def cmd_simulate(args) -> int:
+    """Simulate COBRA and the box; write the trajectory NPZ; print a one-line JSON summary."""
+    from .reference import ReferenceError, builtin_reference, load_reference
+    from .simulate import simulate
+    from .stepper import SimulationError, StepSettings
+
+    # check every input before the (long) run, so that bad input writes nothing
+    _check_writable(args.out)
+    try:
+        reference = load_reference(args.reference) if args.reference else builtin_reference(args.gait)
+        settings = StepSettings(dt=args.dt, servo=args.servo)
+    except (ReferenceError, ValueError) as exc:
+        raise SystemExit(f"error: {exc}") from None
+    params = CobraParameters()
+    if args.mu_robot_box is not None:
+        params = dataclasses.replace(params, mu_robot_box=args.mu_robot_box)
+    try:
+        model = cobra_model(params)
+    except ValueError as exc:
+        raise SystemExit(f"error: {exc}") from None
+    progress = None if args.quiet else _progress(f"simulate {args.reference or args.gait}")
+    try:
+        with c_stdout_to_stderr():
+            traj = simulate(model, reference, args.duration, settings, progress=progress)
+    except SimulationError as exc:
+        if exc.trajectory is None:  # bad input: nothing was computed, nothing is written
+            raise SystemExit(f"error: {exc}") from None
+        failed = os.path.splitext(args.out)[0] + ".failed.npz"
+        exc.trajectory.to_npz(failed)
+        print(json.dumps(exc.trajectory.summary()))
+        raise SystemExit(f"error: {exc}\nwhat was computed up to the failure is in {failed}") from None
+    traj.to_npz(args.out)
+    print(json.dumps(traj.summary()))
+    return 0
+
+
+def cmd_bench(args) -> int:
+    """Time per step of the full model while rolling with the box, and MuJoCo's on the same MJCF."""
+    from .bench import format_table, run_bench
+
+    if args.json:
+        _check_writable(args.json)
+    if not (np.isfinite(args.duration) and args.duration > 0):
+        raise SystemExit(f"error: duration must be positive and finite, got {args.duration}")
+    with c_stdout_to_stderr():
+        record = run_bench(args.duration, with_mujoco=not args.no_mujoco,
+                           progress=None if args.quiet else _progress("bench"))
+    print(format_table(record))
+    if args.json:
+        write_text_atomic(args.json, json.dumps(record, indent=2) + "\n")
+        print(f"wrote {args.json}")
+    return 0
+
+
+def _finite_float(text: str) -> float:
+    """argparse type: a float, rejected if not finite (the message names the value)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not np.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="cobra-ref",
@@ -86,6 +194,32 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--timestep", type=float, default=1e-3, help="MuJoCo timestep [s] (default 1e-3)")
     p.add_argument("--no-box", action="store_true", help="export the robot alone")
     p.set_defaults(func=cmd_export_mjcf)
+
+    p = sub.add_parser("simulate", help="simulate COBRA pushing the box; write an NPZ, print a JSON summary",
+                       description="Simulate COBRA and the box on flat ground for a joint reference. Writes every "
+                                   "array (t, q, qd, tau, box_pose, per-step solver records, the contact log) to "
+                                   "OUT.npz and prints a one-line JSON summary (box_displacement, "
+                                   "max_penetration, max_cone_residual, real_time_factor).")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--gait", default="rolling",
+                     help="built-in reference (default 'rolling': C-shaped lateral rolling, A = 0.5 rad, 0.5 Hz)")
+    src.add_argument("--reference", metavar="FILE", help="reference file: .npz (t, q) or .csv (t,J0..J10)")
+    p.add_argument("--duration", type=_finite_float, default=10.0, help="simulated time [s] (default 10)")
+    p.add_argument("--dt", type=_finite_float, default=1e-3, help="time step [s] (default 1e-3)")
+    p.add_argument("--servo", choices=("prescribed", "pd"), default="prescribed",
+                   help="joint servo (default prescribed: the joints follow the reference exactly)")
+    p.add_argument("--mu-robot-box", type=_finite_float, default=None,
+                   help="friction coefficient of robot-box contacts (default 0.5, assumption C22)")
+    p.add_argument("--out", default="run.npz", help="output NPZ (default run.npz)")
+    p.add_argument("--quiet", action="store_true", help="no progress line")
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("bench", help="time per step against MuJoCo on the same model (a benchmark)")
+    p.add_argument("--duration", type=_finite_float, default=2.0, help="simulated time [s] (default 2)")
+    p.add_argument("--json", metavar="FILE", help="also write the record as JSON")
+    p.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo comparison")
+    p.add_argument("--quiet", action="store_true", help="no progress line")
+    p.set_defaults(func=cmd_bench)
     return parser
 
 

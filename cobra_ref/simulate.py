@@ -27,7 +27,7 @@ import json
 import os
 import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -96,13 +96,17 @@ class Trajectory:
                 os.unlink(tmp)
 
 
-def initial_state(model: Model, reference, box_offset=(0.0, -0.12), clearance: float = 1e-3):
+def initial_state(model: Model, reference, box_offset=None, box_gap: float = 0.05, clearance: float = 1e-3):
     """Robot at rest in the reference's t = 0 shape, head at the origin facing +x, lowest sphere
-    ``clearance`` above the ground; the box resting on the ground with its centre at
-    ``box_offset`` = (dx, dy) from the centre of L5, next to the middle of the snake (assumption C9).
+    ``clearance`` above the ground; the box resting flat on the ground beside the middle of the
+    snake (assumption C9).
 
-    The default dy = -0.12 m puts the box 12 mm from the side of the middle link
-    (0.0535 + 0.05 + 0.0165 m) on the side the built-in rolling gait moves towards (-y).
+    Box placement: the middle of the snake is the midpoint of the two middle bodies' centres of
+    mass (L5 and L6 for COBRA), and the concave side is the horizontal direction d from there
+    to the robot's centre of mass. The box's centre goes to middle + (r + a/2 + box_gap) d,
+    turned so that one face looks back at the robot: ``box_gap`` (default 0.05 m, C9) is then
+    the clearance between that face and the middle link's cylinder. ``box_offset`` = (dx, dy)
+    instead puts the box centre at middle + (dx, dy), axis-aligned.
     """
     q = neutral_q(model)
     act_q = [model.q_idx[i].start for i, jt in enumerate(model.joint_type) if jt != "free"]
@@ -113,15 +117,27 @@ def initial_state(model: Model, reference, box_offset=(0.0, -0.12), clearance: f
     q[2] = clearance - min(bottoms)
     if model.boxes:
         box = model.boxes[0]
-        mid = len(model.body_names) // 2 - 1  # body 5 = L5 for COBRA (13 bodies with the box)
-        centre = kin.p[mid] + kin.R[mid] @ model.com[mid]
+        robot = [i for i in range(model.nb) if i != box.body]
+        com = np.array([kin.p[i] + kin.R[i] @ model.com[i] for i in robot])
+        mid_bodies = robot[len(robot) // 2 - 1:len(robot) // 2 + 1]
+        middle = com[mid_bodies].mean(axis=0)
         iq = model.q_idx[box.body]
-        q[iq.start:iq.start + 3] = [centre[0] + box_offset[0], centre[1] + box_offset[1], box.half[2]]
+        if box_offset is not None:
+            centre, yaw = middle[:2] + np.asarray(box_offset, dtype=float), 0.0
+        else:
+            d = (np.average(com, axis=0, weights=[model.mass[i] for i in robot]) - middle)[:2]
+            if np.linalg.norm(d) < 1e-3:  # a straight or symmetric S shape: use the body's left side
+                d = kin.R[mid_bodies[0]][:2, 1]
+            d = d / np.linalg.norm(d)
+            r = max(sph.radius[np.isin(sph.body, mid_bodies)])
+            centre, yaw = middle[:2] + (r + box.half[0] + box_gap) * d, np.arctan2(d[1], d[0])
+        q[iq.start:iq.start + 3] = [centre[0], centre[1], box.half[2]]
+        q[iq.start + 3:iq.start + 7] = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
     return q, np.zeros(model.nv)
 
 
 def simulate(model: Model, reference, duration: float, settings: StepSettings = StepSettings(), q0=None,
-             qd0=None, progress=None, box_offset=(0.0, -0.12)) -> Trajectory:
+             qd0=None, progress=None, box_offset=None) -> Trajectory:
     """Simulate ``duration`` seconds; return a Trajectory (see the module docstring for fields).
 
     Raises ``SimulationError`` for a bad duration, an initial state in deep penetration, or a
@@ -143,18 +159,28 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
         t = k * settings.dt
         try:
             res = stepper.step(q, qd, t, reference)
-        except (ContactSolveError, np.linalg.LinAlgError) as exc:
-            traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): {exc}")
-            raise SimulationError(f"contact solve failed at step {k}, t = {t:.4f} s: {exc}", traj) from exc
+        except (ContactSolveError, np.linalg.LinAlgError, SimulationError) as exc:
+            traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): {exc}", meta(stepper))
+            what = "contact solve failed" if isinstance(exc, ContactSolveError) else "step failed"
+            raise SimulationError(f"{what} at step {k}, t = {t:.4f} s: {exc}", traj) from exc
         q, qd = res.q, res.qd
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
-            traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): non-finite state")
+            traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): non-finite state",
+                              meta(stepper))
             raise SimulationError(f"non-finite state at step {k}, t = {t:.4f} s", traj)
         log.add_step(k, res, stepper)
         log.add_state(t + settings.dt, q, qd)
-        if progress is not None and (k + 1) % 250 == 0:
+        if progress is not None and ((k + 1) % 250 == 0 or k + 1 == n_steps):
             progress(k + 1, n_steps)
-    return log.finish(time.perf_counter() - start)
+    return log.finish(time.perf_counter() - start, "", meta(stepper))
+
+
+def meta(stepper: Stepper) -> dict:
+    """What a run was made with (settings, friction, model), and the seconds spent per phase."""
+    model = stepper.model
+    return {"settings": asdict(stepper.s), "model": model.name, "nq": model.nq, "nv": model.nv,
+            "mu": model.mu, "mu_robot_box": model.mu if model.mu_robot_box is None else model.mu_robot_box,
+            "phase_seconds": dict(stepper.timing)}
 
 
 def _check_start(stepper: Stepper, q, qd) -> None:
@@ -210,11 +236,11 @@ class _Log:
             rows["contact_force"].append(np.einsum("kij,kj->ki", cs.frame[active], p3) / self.dt)
         self.n = k + 1
 
-    def finish(self, wall_time: float, error: str = "") -> "Trajectory":
+    def finish(self, wall_time: float, error: str = "", meta: dict | None = None) -> "Trajectory":
         n = self.n
         shapes = {"contact_point": (0, 3), "contact_normal": (0, 3), "contact_force": (0, 3)}
         contacts = {k: (np.concatenate(v) if v else np.zeros(shapes.get(k, (0,)))) for k, v in self.contact_rows.items()}
         box_pose = self.q[:n + 1, self.box] if self.box is not None else np.zeros((n + 1, 7))
         return Trajectory(self.dt, self.t[:n + 1].copy(), self.q[:n + 1].copy(), self.qd[:n + 1].copy(),
                           self.tau[:n].copy(), box_pose.copy(), {k: v[:n].copy() for k, v in self.steps.items()},
-                          contacts, wall_time, error)
+                          contacts, wall_time, error, meta or {})

@@ -106,7 +106,9 @@ class Stepper:
         self._hint: dict = {}
         self.timing = dict.fromkeys(PHASES, 0.0)  # seconds spent in each phase, summed over steps
 
-    def step(self, q: np.ndarray, qd: np.ndarray, t: float, reference) -> StepResult:
+    def step(self, q: np.ndarray, qd: np.ndarray, t: float, reference, tau_ext=None) -> StepResult:
+        """One step from (q, qd) at time t; ``tau_ext`` (nv,): an optional generalized external
+        force held over the step (a hand pushing a body; zero by default), added to tau in eq. (1)."""
         s, model, dt = self.s, self.model, self.s.dt
         clock = [time.perf_counter()]
         terms = self.chain.terms(q, qd)
@@ -115,16 +117,18 @@ class Stepper:
         tau = np.zeros(model.nv)
         qd_next = qd.copy()
         if s.servo == "prescribed":
-            q_ref_next = reference(t + dt)[0]
+            q_ref_next = _finite(reference(t + dt)[0], t + dt)
             qd_next[self.act] = (q_ref_next - q[self.act_q]) / dt
         else:
             q_ref, qd_ref, _ = reference(t)
+            _finite(np.concatenate([q_ref, qd_ref]), t)
             tau_pd = s.kp * (q_ref - q[self.act_q]) + s.kd * (qd_ref - qd[self.act])
             tau[self.act] = np.clip(tau_pd, -self.tau_max, self.tau_max)
         # Step 2: eq. (1) without contact for the free coordinates F
+        tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
         F, P = self.free, self.prescribed
         M_FF = M[np.ix_(F, F)]
-        rhs = dt * (tau[F] - h[F]) - M[np.ix_(F, P)] @ (qd_next[P] - qd[P])
+        rhs = dt * (tau[F] + tau_ext[F] - h[F]) - M[np.ix_(F, P)] @ (qd_next[P] - qd[P])
         L = np.linalg.cholesky(M_FF)
         qd_next[F] = qd[F] + _chol_solve(L, rhs)
         clock.append(time.perf_counter())
@@ -146,7 +150,7 @@ class Stepper:
         w = J @ qd_next
         # Step 5: joint torques from eq. (1) with the contact impulses (prescribed servo)
         if s.servo == "prescribed":
-            tau = M @ (qd_next - qd) / dt + h - J.T @ p / dt
+            tau = M @ (qd_next - qd) / dt + h - J.T @ p / dt - tau_ext
         self._remember(keys, p, w, contacts)
         # energy bookkeeping at the midpoint velocity: Delta KE = u_mid . M (u+ - u) exactly
         u_mid = 0.5 * (qd + qd_next)
@@ -181,6 +185,14 @@ class Stepper:
 
     def reset(self):
         self._warm, self._hint = {}, {}
+
+
+def _finite(values: np.ndarray, t: float) -> np.ndarray:
+    """The reference's values, or a SimulationError naming the time they stop being finite."""
+    values = np.asarray(values, dtype=float)
+    if not np.all(np.isfinite(values)):
+        raise SimulationError(f"the joint reference is not finite at t = {t:.4f} s: {values}")
+    return values
 
 
 def _chol_solve(L: np.ndarray, B: np.ndarray) -> np.ndarray:

@@ -1,8 +1,10 @@
 """The cobra-ref command as a user runs it (in-process, and once as a real subprocess)."""
 
+import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from cobra_ref.cli import main
@@ -32,3 +34,83 @@ def test_export_mjcf_into_a_missing_directory_fails_clearly_and_writes_nothing(t
 def test_python_dash_m_help_lists_the_subcommands():
     out = subprocess.run([sys.executable, "-m", "cobra_ref", "--help"], capture_output=True, text=True, check=True)
     assert "info" in out.stdout and "export-mjcf" in out.stdout
+
+
+# ------------------------------------------------------------------------------ simulate
+
+SUMMARY_KEYS = {"box_displacement", "max_penetration", "max_cone_residual", "real_time_factor"}
+
+
+def test_simulate_writes_the_npz_and_prints_one_json_line(tmp_path, capfd):
+    out = tmp_path / "run.npz"
+    assert main(["simulate", "--duration", "0.05", "--out", str(out), "--quiet"]) == 0
+    lines = capfd.readouterr().out.strip().splitlines()
+    assert len(lines) == 1, f"stdout must carry only the JSON summary (OSQP's C output goes to stderr): {lines}"
+    summary = json.loads(lines[0])
+    assert SUMMARY_KEYS <= set(summary) and len(summary["box_displacement"]) == 2
+    with np.load(out) as run:
+        n = len(run["t"])
+        assert n == 51 and run["q"].shape == (n, 25) and run["qd"].shape == (n, 23)
+        assert run["tau"].shape == (n - 1, 11) and run["box_pose"].shape == (n, 7)
+        for key in ("osqp_status", "osqp_iter", "complementarity", "cone_residual", "max_penetration", "cond_G"):
+            assert run[key].shape == (n - 1,), key
+        m = len(run["contact_step"])
+        assert m > 0 and run["contact_kind"].shape == (m,) and run["contact_force"].shape == (m, 3)
+        assert set(np.unique(run["contact_kind"])) <= {0, 1, 2}
+        # the summary is computed from these arrays
+        assert summary["max_penetration"] == float(run["max_penetration"].max())
+
+
+def _bad(argv, tmp_path, message):
+    out = tmp_path / "run.npz"
+    with pytest.raises(SystemExit) as err:
+        main(["simulate", *argv, "--out", str(out), "--quiet"])
+    assert message in str(err.value)
+    assert not out.exists() and list(tmp_path.iterdir()) == [], "bad input must write nothing"
+
+
+def test_simulate_unknown_gait_names_it(tmp_path):
+    _bad(["--gait", "slithering"], tmp_path, "unknown reference 'slithering'")
+
+
+@pytest.mark.parametrize("content, message", [
+    ("t,J0,J1\n0,0,0\n", "CSV header must be"),
+    ("t," + ",".join(f"J{i}" for i in range(11)) + "\n0,1,2\n1,x,3\n", "malformed reference file"),
+    ("t," + ",".join(f"J{i}" for i in range(11)) + "\n" + ",".join(["0"] * 12) + "\n", "at least 4 samples"),
+    ("t," + ",".join(f"J{i}" for i in range(11)) + "\n" + "\n".join(
+        ",".join(["0"] * 12) for _ in range(5)) + "\n", "strictly increasing"),
+])
+def test_simulate_malformed_reference_file_names_the_problem(tmp_path, content, message):
+    ref_dir = tmp_path / "in"
+    ref_dir.mkdir()
+    ref = ref_dir / "ref.csv"
+    ref.write_text(content)
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    _bad(["--reference", str(ref)], out_dir, message)
+
+
+@pytest.mark.parametrize("dt", ["0", "-1e-3"])
+def test_simulate_rejects_dt_not_positive(tmp_path, dt):
+    _bad([f"--dt={dt}"], tmp_path, "dt must be positive")
+
+
+@pytest.mark.parametrize("duration", ["inf", "nan"])
+def test_simulate_rejects_a_duration_that_is_not_finite(tmp_path, duration, capsys):
+    _bad(["--duration", duration], tmp_path, "2")  # argparse exits with status 2 ...
+    assert "must be finite" in capsys.readouterr().err  # ... and names the problem
+
+
+def test_simulate_into_a_missing_directory_fails_before_running(tmp_path):
+    with pytest.raises(SystemExit, match="output directory does not exist"):
+        main(["simulate", "--out", str(tmp_path / "nope" / "run.npz"), "--quiet"])
+
+
+def test_bench_json_has_the_documented_keys(tmp_path, capfd):
+    out = tmp_path / "bench.json"
+    assert main(["bench", "--duration", "0.02", "--json", str(out), "--quiet"]) == 0
+    record = json.loads(out.read_text())
+    assert {"us_per_step", "real_time_factor", "breakdown_us", "mujoco_us_per_step", "ratio_vs_mujoco"} <= set(record)
+    assert set(record["breakdown_us"]) == {"dynamics", "contacts", "qp", "rest"}
+    assert record["us_per_step"] > 0 and record["real_time_factor"] > 0
+    assert "us/step" in capfd.readouterr().out

@@ -315,3 +315,57 @@ def test_simulate_logs_one_torque_column_per_joint_of_the_model(n_locks):
     q0, qd0 = _at_rest_on_ground(model, BALL_RADIUS)
     traj = simulate(model, _hold(n_locks), 0.01, StepSettings(dt=DT), q0=q0, qd0=qd0)
     assert traj.tau.shape == (10, n_locks)
+
+
+# ------------------------------------------------------------------- a sphere pushing the box
+
+
+def _pusher_and_box(mu, pusher_mass=0.5, pusher_radius=0.03):
+    """A sphere (a locked two-piece body, as above) and the box (body 2, its own free joint)."""
+    pusher = _locked_rigid_body("pusher", pusher_mass, 0.4 * pusher_mass * pusher_radius**2 * np.eye(3),
+                                SphereSet(body=np.zeros(1, dtype=int), center=np.zeros((1, 3)),
+                                          radius=np.array([pusher_radius])), mu=mu)
+    box = _box(mu=mu, n_locks=0)
+    fields = ("body_names", "joint_names", "joint_type", "tree_pos", "tree_rot", "mass", "com", "I_com",
+              "q_limit", "tau_limit")
+    merged = {k: getattr(pusher, k) + getattr(box, k) for k in fields}
+    return Model(name="pusher_box", parent=pusher.parent + (-1,), gravity=pusher.gravity, spheres=pusher.spheres,
+                 boxes=(BoxGeom(body=2, half=np.full(3, BOX_SIDE / 2)),), mu=mu, **merged)
+
+
+@pytest.mark.parametrize("ratio", [0.5, 0.95, 1.05, 1.5])
+def test_a_sphere_pushing_the_box_moves_it_only_once_the_push_exceeds_mu_m_g(ratio, mu=0.5, T=0.5):
+    """A hand holds a 0.5 kg sphere at the box's mid-height (its weight cancelled by tau_ext) and
+    pushes it along +x with F = ratio * mu m_box g into the resting box.
+
+    Statics: the box's ground friction can hold up to mu m_box g = 2.45 N, so for ratio < 1 the
+    box stays put (displacement below 1e-6 m over 0.5 s).
+    Dynamics: for ratio > 1 sphere and box move together, (m_s + m_b) a = F - mu m_b g, and the
+    discrete steps (semi-implicit Euler: v_k = k a dt, x_N = dt sum v_k) give
+    x_N = a dt^2 N (N + 1) / 2; within 0.2 % (the issue asks 2 %).
+    The push acts at the box's centre height and mu = 0.5, so the box does not tip: moments
+    about its centre of mass give N_front - N_rear = mu N, both corners pairs loaded.
+    """
+    model = _pusher_and_box(mu)
+    m_s = model.mass[0] + model.mass[1]
+    F = ratio * mu * BOX_MASS * GRAVITY
+    q = np.zeros(model.nq)
+    # sphere touching the box face at rest (no approach, so no impact impulse)
+    q[:7] = [-(BOX_SIDE / 2 + 0.03), 0.0, BOX_SIDE / 2, 1.0, 0.0, 0.0, 0.0]  # sphere centre
+    q[8:15] = [0.0, 0.0, BOX_SIDE / 2, 1.0, 0.0, 0.0, 0.0]  # box centre, resting on the ground
+    qd = np.zeros(model.nv)
+    tau_ext = np.zeros(model.nv)
+    tau_ext[0], tau_ext[2] = F, m_s * GRAVITY  # push along x, hold the sphere's weight
+    stepper, hold = Stepper(model), _hold(1)
+    n_steps = int(round(T / DT))
+    for k in range(n_steps):
+        res = stepper.step(q, qd, k * DT, hold, tau_ext=tau_ext)
+        q, qd = res.q, res.qd
+    box_x = q[8]
+    if ratio < 1:
+        assert abs(box_x) < 1e-6, f"the box must not move for F < mu m g, moved {box_x:.2e} m"
+    else:
+        a = (F - mu * BOX_MASS * GRAVITY) / (m_s + BOX_MASS)
+        x_expected = a * DT**2 * n_steps * (n_steps + 1) / 2
+        np.testing.assert_allclose(box_x, x_expected, rtol=2e-3)
+        assert abs(q[9]) < 1e-6 and abs(q[10] - BOX_SIDE / 2) < 1e-5, "straight, flat slide"

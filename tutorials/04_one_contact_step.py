@@ -40,9 +40,10 @@ np.set_printoptions(precision=5, suppress=True)
 #
 #     w = G p + c,    G = J_c M^-1 J_c^T  (eq. (5), the Delassus matrix),   c = J_c u_free.
 #
-# G is the "inverse inertia seen at the contacts". To keep an open gap g > 0 from closing
-# by more than g in one step, we ask for `g + dt w_N >= 0` rather than `w_N >= 0`. We do this by
-# adding `g / dt` to the normal rows of c, so that w_N means (gap after the step) / dt.
+# G is the "inverse inertia seen at the contacts". To keep an open gap g_i > 0 (the paper's
+# gap function; plain g is gravity here) from closing by more than g_i in one step, we ask
+# for `g_i + dt w_N >= 0` rather than `w_N >= 0`. We do this by adding `g_i / dt` to the
+# normal rows of c, so that w_N means (gap after the step) / dt.
 #
 # Least action, eq. (6) (with impulses), finds p:
 #
@@ -60,7 +61,7 @@ np.set_printoptions(precision=5, suppress=True)
 #
 #     J_c = [n; t1; t2] = [[0, 0, 1], [1, 0, 0], [0, 1, 0]],    G = J_c M^-1 J_c^T = 1 / m.
 #
-# The ball starts at rest on the plane (g = 0), so
+# The ball starts at rest on the plane (g_i = 0), so
 # `u_free = (0, 0, -g dt)` and `c = J_c u_free = (-g dt, 0, 0)`.
 #
 # **By hand.** Without constraints the minimiser is `p = -G^-1 c = (m g dt, 0, 0)`. It has
@@ -120,11 +121,11 @@ print("fast slip: p =", p_fast, " by hand", p_fast_hand, "  w =", G_ball @ p_fas
 print("slow slip: p =", p_slow, " by hand", p_slow_hand, "  w =", G_ball @ p_slow + c_slow)
 
 # %% [markdown]
-# **The gap term.** A ball hovering g = 0.5 mm above the plane and falling at 1 m/s has
-# `c_N = -1 - g dt + g / dt = -0.50981 m/s < 0`. It would pass through the plane within this
+# **The gap term.** A ball hovering g_i = 0.5 mm above the plane and falling at 1 m/s has
+# `c_N = -1 - g dt + g_i / dt = -0.50981 m/s < 0`. It would pass through the plane within this
 # step, so it receives `p_N = -m c_N`. Its velocity after the step is then exactly
-# `-g / dt = -0.5 m/s`: the gap closes at the end of the step, without penetration and without
-# a bounce. A ball at rest 5 mm up has `c_N = 5 m/s - g dt > 0` and gets nothing: the
+# `-g_i / dt = -0.5 m/s`: the gap closes at the end of the step, without penetration and without
+# a bounce. A ball at rest 5 mm up has `c_N = g_i / dt - g dt = 5 m/s - g dt > 0` and gets nothing: the
 # candidate contact (within the 10 mm margin) stays inactive. COBRA's first steps below
 # work the same way.
 
@@ -191,7 +192,7 @@ for name, c, p in (("rest", c_rest, p_rest), ("fast slip", c_fast, p_fast), ("sl
 # Projected Gauss-Seidel (PGS) solves the same conditions one row r at a time. It first
 # sets `w_r = (G p + c)_r` to zero by changing p_r alone, `p_r <- p_r - w_r / G_rr`, then
 # projects the result: a normal row onto p_N >= 0, a tangential row onto
-# `[-mu p_N, mu p_N]` of its own contact. Sweeps repeat until nothing changes. PGS has no
+# `[-mu p_N, mu p_N]` of its own contact. We simply run a fixed number of sweeps. PGS has no
 # regularization, no ADMM and no friction fixed point, so it shares no code with OSQP.
 
 # %%
@@ -254,7 +255,7 @@ print(f"mu ground = {model.mu}, mu robot-box = {model.mu_robot_box}")
 # `frame @ p / dt`.
 #
 # What to expect: at t = 0 the robot's spheres hover 1 to 4.5 mm up. Each has
-# `c_N ~ g / dt >= 1 m/s > 0`, so only the box carries load at first. The ratio is then
+# `c_N ~ g_i / dt >= 1 m/s > 0`, so only the box carries load at first. The ratio is then
 # `m_box / (m_robot + m_box) = 0.077`. The robot falls freely until its lowest sphere (the
 # tail's, the largest) can close its gap within one step. After that it rocks on its spheres
 # and comes to rest on three of them.
@@ -262,21 +263,20 @@ print(f"mu ground = {model.mu}, mu robot-box = {model.mu_robot_box}")
 # %%
 stepper = Stepper(model)
 q, u = q0.copy(), u0.copy()
-force_ratio, n_robot_active, first_steps = [], [], []
+force_ratio, n_robot_active = [], []
 for k in range(300):
     res = stepper.step(q, u, k * dt, ref)
     on_ground = res.contacts.kind != ROBOT_BOX
     f_world = np.einsum("kij,kj->ki", res.contacts.frame, res.p.reshape(-1, 3)) / dt   # N
     force_ratio.append(f_world[on_ground, 2].sum() / weight)
     n_robot_active.append(int(np.sum((res.contacts.kind == 0) & (res.p[0::3] > 1e-9))))
-    if k < 2:
-        first_steps.append(res)
+    if k == 0:
+        r0 = res                                  # the very first step, for the printout below
     q, u = res.q, res.qd
-t_settled = 300 * dt
+t_settled, res_last = 300 * dt, res             # state (q, u) at t = 0.3 s, last step's result
 force_ratio = np.array(force_ratio)
 
 # %%
-r0 = first_steps[0]
 print("step 0: gaps of the candidates [mm]:", np.round(1e3 * r0.contacts.g, 2))
 print("        normal forces p_N / dt [N] :", np.round(r0.p[0::3] / dt, 3) + 0.0)
 landing = int(np.argmax(np.array(n_robot_active) > 0))
@@ -290,8 +290,9 @@ print(f"active robot contacts at steps 50, 100, 200, 299: {[n_robot_active[k] fo
 # Each touchdown shows as a short spike (the log-scale plot in section 10). The contact
 # removes the approach velocity within one step, with no bounce, so the force over that one
 # step is large. While the robot rocks on two spheres, the ratio stays a few % below 1: the
-# centre of mass accelerates downwards as the robot tips. Once it rests on three spheres (from about step
-# 225), the ratio is 1 to within 1e-4. The small remainder is the rolling gait starting up.
+# centre of mass accelerates downwards as the robot tips. Once it rests on three spheres
+# (from about step 225), the ratio is 1 to within 1e-4. The small remainder is the rolling
+# gait starting up.
 #
 # ## 8. One step by hand at the settled state
 # From here on, (q, u) is the state after 0.3 s. We rebuild what `Stepper.step` does, using
@@ -351,7 +352,7 @@ for k in range(n_c):
 # **8d. The Delassus matrix over the free coordinates** (eq. (5)). Only the free columns move
 # under contact, `G = J_F M_FF^-1 J_F^T`, with J_F = J_c[:, F].
 #
-# **G is singular.** G is (3 n_c) x (3 n_c) = 45 x 45, but it is a product through only 12
+# **G is singular.** G is (3 n_c) x (3 n_c), 45 x 45 here, but it is a product through only 12
 # free DoF, so `rank G <= 12`. Put another way, the 13 spheres rest on one plane, and the
 # robot's shape is rigid over the step (its joints are prescribed). Whatever the sphere
 # impulses are, they act on the robot only through their resultant force and moment, which
@@ -370,11 +371,12 @@ sv = np.linalg.svd(G, compute_uv=False)
 eps_reg = 1e-6 * np.mean(np.diag(G))
 rank_G = np.linalg.matrix_rank(G)
 print(f"G: {G.shape}, rank {rank_G}, singular values 1-13: {sv[:13]}")
-print(f"cond(G) = {sv[0] / sv[-1]:.1e} (singular);  cond(G + eps 1) = {(sv[0] + eps_reg) / eps_reg:.3e}")
+print(f"cond(G) = {sv[0] / sv[-1]:.1e} (numerically infinite: G is singular)")
+print(f"cond(G + eps 1) = {(sv[0] + eps_reg) / eps_reg:.3e}, eps = {eps_reg:.2e}")
 
 # %% [markdown]
-# **8e. The free contact velocity**, `c = J_c u_free`, plus the gap term g / dt on the normal
-# rows. A penetration (g < 0) is removed gently, at the rate beta g / dt with beta = 0.2.
+# **8e. The free contact velocity**, `c = J_c u_free`, plus the gap term g_i / dt on the normal
+# rows. A penetration (g_i < 0) is removed gently, at the rate beta g_i / dt with beta = 0.2.
 
 # %%
 c = J @ u_free
@@ -419,7 +421,7 @@ p_star, info_star = ContactQP(model.mu, fp_max=500).solve(G, c, mu=mu_c)
 print(f"p*: {info_star.status} after {info_star.fp_iterations} iterates")
 print(f"max |p - p*| = {np.abs(p - p_star).max():.1e} N s  (max p* = {p_star.max():.4f} N s);"
       f" sum p_N / dt: {p[0::3].sum() / dt:.4f} N vs {p_star[0::3].sum() / dt:.4f} N")
-print(f"running stepper, last settling step: '{res.qp.status}' after {res.qp.fp_iterations} iterate(s)")
+print(f"running stepper, last settling step: '{res_last.qp.status}' after {res_last.qp.fp_iterations} iterate(s)")
 
 # %% [markdown]
 # When the status above says "not converged", the cold step stopped early. Its normal

@@ -1,0 +1,94 @@
+"""``cobra-ref bench``: time per step of the full COBRA + box model, against MuJoCo.
+
+Helper: a benchmark, not a test. It simulates the built-in rolling reference with the box
+(the ``cobra-ref simulate`` defaults) for ``duration`` seconds at dt, and reports:
+
+* ``us_per_step`` -- wall time per step [us] and ``real_time_factor`` = simulated / wall time;
+* ``breakdown_us`` -- per step: ``dynamics`` (poses, M, h, the contact-free velocity),
+  ``contacts`` (gap functions, J_c, Delassus G and c), ``qp`` (the OSQP least-action solve with
+  its friction fixed point), ``rest`` (torques, energy ledger, integration);
+* ``mujoco_us_per_step`` -- MuJoCo's ``mj_step`` on the exported MJCF of the same model, same
+  dt, its position actuators tracking the same reference from the same initial state (soft
+  contact, pyramidal cone, default solver), timed over the same number of steps; and
+  ``ratio_vs_mujoco`` = us_per_step / mujoco_us_per_step.
+
+One core: the loop is single-threaded Python + OSQP; MuJoCo runs single-threaded too.
+"""
+
+from __future__ import annotations
+
+import platform
+import time
+
+import numpy as np
+
+from .reference import RollingReference
+from .robots import cobra_model
+from .simulate import initial_state, simulate
+from .stepper import PHASES, StepSettings
+
+
+def run_bench(duration: float = 2.0, dt: float = 1e-3, with_mujoco: bool = True, progress=None) -> dict:
+    """Time the rolling push; return the benchmark record (see the module docstring)."""
+    model = cobra_model()
+    reference = RollingReference()
+    settings = StepSettings(dt=dt)
+    q0, qd0 = initial_state(model, reference)
+    traj = simulate(model, reference, duration, settings, q0, qd0, progress=progress)
+    n = len(traj.tau)
+    us = traj.wall_time / n * 1e6
+    record = {
+        "model": f"COBRA + box, nq = {model.nq}, nv = {model.nv}, built-in rolling, dt = {dt}",
+        "steps": n,
+        "us_per_step": round(us, 1),
+        "real_time_factor": round(traj.duration / traj.wall_time, 4),
+        "breakdown_us": {k: round(traj.meta["phase_seconds"][k] / n * 1e6, 1) for k in PHASES},
+        "mean_contacts": round(float(np.mean(traj.steps["n_contacts"])), 2),
+        "mean_fixed_point_iterates": round(float(np.mean(traj.steps["fp_iter"])), 2),
+        "mujoco_us_per_step": None,
+        "ratio_vs_mujoco": None,
+        "machine": f"{platform.processor() or platform.machine()}, Python {platform.python_version()}",
+    }
+    if with_mujoco:
+        mj_us = mujoco_us_per_step(model, reference, q0, n, dt)
+        if mj_us is not None:
+            record["mujoco_us_per_step"] = round(mj_us, 2)
+            record["ratio_vs_mujoco"] = round(us / mj_us, 1)
+    return record
+
+
+def mujoco_us_per_step(model, reference, q0, n_steps: int, dt: float) -> float | None:
+    """MuJoCo's wall time per mj_step [us] on the exported model, or None without mujoco."""
+    try:
+        import mujoco
+    except ImportError:
+        return None
+    from .mjcf import to_mjcf
+
+    m = mujoco.MjModel.from_xml_string(to_mjcf(model, timestep=dt))
+    d = mujoco.MjData(m)
+    d.qpos[:] = q0
+    mujoco.mj_forward(m, d)
+    # the reference sampled beforehand, so only mj_step is timed
+    ctrl = np.array([reference(k * dt)[0] for k in range(n_steps)])
+    start = time.perf_counter()
+    for k in range(n_steps):
+        d.ctrl[:] = ctrl[k]
+        mujoco.mj_step(m, d)
+    return (time.perf_counter() - start) / n_steps * 1e6
+
+
+def format_table(record: dict) -> str:
+    """The benchmark record as a small text table."""
+    lines = [f"{record['model']}, {record['steps']} steps",
+             f"{'cobra_ref':<28}{record['us_per_step']:>10.1f} us/step   real-time factor {record['real_time_factor']}"]
+    for k, v in record["breakdown_us"].items():
+        lines.append(f"  {k:<26}{v:>10.1f} us/step")
+    lines.append(f"  (mean {record['mean_contacts']} contacts, {record['mean_fixed_point_iterates']} friction "
+                 f"fixed-point iterates per step)")
+    if record["mujoco_us_per_step"] is not None:
+        lines.append(f"{'MuJoCo mj_step (same MJCF)':<28}{record['mujoco_us_per_step']:>10.2f} us/step")
+        lines.append(f"{'ratio cobra_ref / MuJoCo':<28}{record['ratio_vs_mujoco']:>10.1f} x")
+    else:
+        lines.append("MuJoCo: not installed (pip install mujoco), no comparison")
+    return "\n".join(lines)
