@@ -54,6 +54,9 @@ def to_mjcf(model: Model, timestep: float = 1e-3, kp: float = 100.0, kv: float =
     default = ET.SubElement(root, "default")
     ET.SubElement(default, "geom", friction=_f([model.mu, 0.005, 0.0001]), solref="0.004 1", condim="3")
     world = ET.SubElement(root, "worldbody")
+    # per-pair friction through MuJoCo's default rule (the max of the two geoms' coefficients):
+    # ground mu, robot and box geoms mu_robot_box (<= mu) -> robot-ground and box-ground get mu,
+    # robot-box gets mu_robot_box, as in cobra_ref's contact solve
     ET.SubElement(world, "geom", name="ground", type="plane", size="0 0 1", **_GROUND_BITS)
     ET.SubElement(world, "light", pos="0 0 3", dir="0 0 -1", directional="true")
 
@@ -93,12 +96,14 @@ def _add_joint(body: ET.Element, model: Model, i: int) -> None:
 def _add_geoms(body: ET.Element, model: Model, i: int) -> None:
     """Contact spheres of body i (named sphere_{i}_{k}), its box, and a visual-only cylinder."""
     mine = np.flatnonzero(model.spheres.body == i)
+    mu_rb = model.mu if model.mu_robot_box is None else min(model.mu_robot_box, model.mu)
+    friction = {"friction": _f([mu_rb, 0.005, 0.0001])}
     for k, s in enumerate(mine):
         ET.SubElement(body, "geom", name=f"sphere_{i}_{k}", type="sphere", size=_f(model.spheres.radius[s]),
-                      pos=_f(model.spheres.center[s]), **_ROBOT_BITS)
+                      pos=_f(model.spheres.center[s]), **_ROBOT_BITS, **friction)
     for box in model.boxes:
         if box.body == i:
-            ET.SubElement(body, "geom", name=f"box_{i}", type="box", size=_f(box.half), **_BOX_BITS)
+            ET.SubElement(body, "geom", name=f"box_{i}", type="box", size=_f(box.half), **_BOX_BITS, **friction)
     cyl = model.visual_cylinders[i] if i < len(model.visual_cylinders) else None
     if cyl is not None:
         length, radius, x_c = cyl

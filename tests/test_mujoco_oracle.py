@@ -110,3 +110,27 @@ def test_exported_joint_ranges_and_actuator_force_limits(cobra, mj):
             np.testing.assert_allclose(m.jnt_range[i], [-cobra.q_limit[i], cobra.q_limit[i]], atol=1e-15)
     assert m.nu == 11
     np.testing.assert_allclose(m.actuator_forcerange, [[-9.2, 9.2]] * 11, atol=0)
+
+
+def test_exported_contact_pairs_have_the_same_friction_as_the_contact_solve(cobra, mj):
+    """MuJoCo combines two geoms' friction by their max: ground mu = 1, robot and box geoms
+    mu_robot_box = 0.5 -> robot-ground and box-ground 1.0, robot-box 0.5 (assumption C22)."""
+    from cobra_ref.reference import RollingReference
+    from cobra_ref.simulate import initial_state
+
+    m, d = mj
+    q, _ = initial_state(cobra, RollingReference(), box_gap=-0.03)  # box 30 mm into the middle links
+    q[2] -= 0.0015  # robot spheres 0.5 mm into the ground
+    d.qpos[:] = q
+    d.qvel[:] = 0
+    mujoco.mj_forward(m, d)
+    box_geom = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, f"box_{cobra.boxes[0].body}")
+    ground = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "ground")
+    seen = set()
+    for c in d.contact[:d.ncon]:
+        pair = {int(c.geom1), int(c.geom2)}
+        kind = ("box-ground" if pair == {box_geom, ground} else "robot-ground" if ground in pair else "robot-box")
+        expected = cobra.mu_robot_box if kind == "robot-box" else cobra.mu
+        assert c.friction[0] == pytest.approx(expected), kind
+        seen.add(kind)
+    assert seen == {"robot-ground", "robot-box", "box-ground"}
