@@ -22,7 +22,7 @@ import time
 
 import numpy as np
 
-from .reference import RollingReference
+from .gaits import RollingGait
 from .robots import cobra_model
 from .simulate import initial_state, simulate
 from .stepper import PHASES, StepSettings
@@ -31,7 +31,7 @@ from .stepper import PHASES, StepSettings
 def run_bench(duration: float = 2.0, dt: float = 1e-3, with_mujoco: bool = True, progress=None) -> dict:
     """Time the rolling push; return the benchmark record (see the module docstring)."""
     model = cobra_model()
-    reference = RollingReference()
+    reference = RollingGait()
     settings = StepSettings(dt=dt)
     q0, qd0 = initial_state(model, reference)
     traj = simulate(model, reference, duration, settings, q0, qd0, progress=progress)

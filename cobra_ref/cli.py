@@ -201,8 +201,9 @@ def build_parser() -> argparse.ArgumentParser:
                                    "OUT.npz and prints a one-line JSON summary (box_displacement, "
                                    "max_penetration, max_cone_residual, real_time_factor).")
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--gait", default="rolling",
-                     help="built-in reference (default 'rolling': C-shaped lateral rolling, A = 0.5 rad, 0.5 Hz)")
+    src.add_argument("--gait", default="C", metavar="NAME",
+                     help="a gait with its default parameters: C (default), S, J, J-mirror (lateral rolling, "
+                          "A = 0.5 rad, 0.5 Hz), sidewinding (A = 0.6 rad); 'rolling' = C")
     src.add_argument("--reference", metavar="FILE", help="reference file: .npz (t, q) or .csv (t,J0..J10)")
     p.add_argument("--duration", type=_finite_float, default=10.0, help="simulated time [s] (default 10)")
     p.add_argument("--dt", type=_finite_float, default=1e-3, help="time step [s] (default 1e-3)")

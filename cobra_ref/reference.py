@@ -1,20 +1,8 @@
 """Joint references q_ref(t), qd_ref(t), qdd_ref(t) for the 11 joints.
 
-A reference is any object with ``__call__(t) -> (q, qd, qdd)`` (three (11,) arrays). Two kinds
-live here: the built-in lateral-rolling sinusoid used until the gait library (issue 4) lands,
-and references read from a file (``cobra-ref simulate --reference FILE``).
-
-Built-in "rolling" (notes B9, fixed-shape lateral rolling in a C shape)::
-
-    theta_i = A cos(phi(t))   for yaw joints (i even)
-    theta_i = A sin(phi(t))   for pitch joints (i odd),
-    phi' = omega r(t),  omega = 2 pi f,  r(t) = smoothstep(t / T_ramp) = 3 s^2 - 2 s^3
-
-The *rolling rate* is ramped, not the amplitude: the robot starts at rest in its fixed C shape
-lying flat (phi = 0: all bending in the yaw joints) and speeds up over T_ramp, so qd and qdd
-start at zero and the start is not impulsive. (Ramping the amplitude instead stands the
-growing arc up on its middle within the first half cycle, and it falls over with an impact.)
-Defaults A = 0.5 rad, f = 0.5 Hz, T_ramp = 1 / f (one cycle).
+A reference is any object with ``__call__(t) -> (q, qd, qdd)`` (three (11,) arrays): a gait of
+:mod:`cobra_ref.gaits` (``builtin_reference(name)``: rolling = C, S, J, J-mirror, sidewinding),
+or a reference read from a file (``cobra-ref simulate --reference FILE``).
 
 Reference files: ``.npz`` with arrays ``t`` (N,) and ``q`` (N, 11), or ``.csv`` with a header
 row ``t,J0,...,J10``; times strictly increasing, N >= 4, finite values; interpolated with a
@@ -24,63 +12,15 @@ C2 cubic spline, held constant after the last sample.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-N_JOINTS = 11
+from .gaits import N_JOINTS, GaitError, gait
 
 
 class ReferenceError(ValueError):
     """A reference that cannot be used (the message names the problem)."""
-
-
-def smoothstep(t: float, T: float):
-    """r, r', r'' of r(t) = 3 s^2 - 2 s^3, s = t / T clipped to [0, 1]."""
-    if T <= 0:
-        return 1.0, 0.0, 0.0
-    s = min(max(t / T, 0.0), 1.0)
-    if s >= 1.0:
-        return 1.0, 0.0, 0.0
-    return 3 * s**2 - 2 * s**3, (6 * s - 6 * s**2) / T, (6 - 12 * s) / T**2
-
-
-def ramped_phase(t: float, omega: float, T: float):
-    """phi, phi', phi'' with phi' = omega r(t): the integral of the smoothstep ramp.
-
-    For t < T: phi = omega T (s^3 - s^4 / 2), s = t / T; afterwards phi grows at omega.
-    """
-    r, rd, _ = smoothstep(t, T)
-    if T <= 0:
-        return omega * t, omega, 0.0
-    s = min(max(t / T, 0.0), 1.0)
-    phi = omega * T * (s**3 - s**4 / 2) + omega * max(t - T, 0.0)
-    return phi, omega * r, omega * rd
-
-
-@dataclass(frozen=True)
-class RollingReference:
-    """Built-in C-shaped lateral rolling sinusoid (see the module docstring)."""
-
-    amplitude: float = 0.5
-    frequency: float = 0.5
-    ramp_time: float | None = None
-
-    def __post_init__(self):
-        for name in ("amplitude", "frequency"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise ReferenceError(f"{name} must be positive and finite, got {v}")
-
-    def __call__(self, t: float):
-        T = 1.0 / self.frequency if self.ramp_time is None else self.ramp_time
-        phi, phid, phidd = ramped_phase(t, 2 * np.pi * self.frequency, T)
-        yaw = np.arange(N_JOINTS) % 2 == 0
-        # theta = A cos(phi) (yaw), A sin(phi) (pitch); chain rule for the derivatives
-        q = self.amplitude * np.where(yaw, np.cos(phi), np.sin(phi))
-        dq = self.amplitude * np.where(yaw, -np.sin(phi), np.cos(phi))  # d theta / d phi
-        return q, dq * phid, -q * phid**2 + dq * phidd
 
 
 class SplineReference:
@@ -133,11 +73,10 @@ def load_reference(path: str) -> SplineReference:
     raise ReferenceError(f"{path}: unknown reference format; use .npz (t, q) or .csv (t,J0..J10)")
 
 
-BUILTIN = {"rolling": RollingReference}
-
-
 def builtin_reference(name: str):
-    """A built-in reference by name, with a clear error for an unknown one."""
-    if name not in BUILTIN:
-        raise ReferenceError(f"unknown reference {name!r}; built-in references: {', '.join(BUILTIN)}")
-    return BUILTIN[name]()
+    """A built-in reference (a gait of :mod:`cobra_ref.gaits` with its defaults) by name, with a
+    clear error for an unknown one."""
+    try:
+        return gait(name)
+    except GaitError as exc:
+        raise ReferenceError(str(exc)) from None

@@ -35,7 +35,7 @@ from .contact import KINDS, find_contacts
 from .contact_qp import ContactSolveError
 from .kinematics import forward_kinematics
 from .model import Model
-from .reference import N_JOINTS
+from .gaits import N_JOINTS
 from .robots import neutral_q
 from .stepper import SimulationError, StepSettings, Stepper
 

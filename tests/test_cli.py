@@ -70,7 +70,7 @@ def _bad(argv, tmp_path, message):
 
 
 def test_simulate_unknown_gait_names_it(tmp_path):
-    _bad(["--gait", "slithering"], tmp_path, "unknown reference 'slithering'")
+    _bad(["--gait", "slithering"], tmp_path, "unknown gait 'slithering'")
 
 
 @pytest.mark.parametrize("content, message", [

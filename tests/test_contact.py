@@ -20,7 +20,7 @@ from cobra_ref.gaps import (
 )
 from cobra_ref.kinematics import integrate
 from cobra_ref.quaternion import quat_to_rot
-from cobra_ref.reference import RollingReference
+from cobra_ref.gaits import RollingGait
 from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import initial_state
 
@@ -66,7 +66,7 @@ def scene(rng):
     """COBRA in its rolling start shape on the ground, the box 4 mm from a link sphere and turned,
     every joint nudged: contacts of all three kinds within a 1 cm margin."""
     model = cobra_model()
-    q, qd = initial_state(model, RollingReference(), box_offset=(0.12, 0.0))
+    q, qd = initial_state(model, RollingGait(), box_offset=(0.12, 0.0))
     q[7:18] += rng.normal(scale=0.02, size=11)
     chain = ChainModel(model)
     terms = chain.terms(q, qd)

@@ -115,11 +115,11 @@ def test_exported_joint_ranges_and_actuator_force_limits(cobra, mj):
 def test_exported_contact_pairs_have_the_same_friction_as_the_contact_solve(cobra, mj):
     """MuJoCo combines two geoms' friction by their max: ground mu = 1, robot and box geoms
     mu_robot_box = 0.5 -> robot-ground and box-ground 1.0, robot-box 0.5 (assumption C22)."""
-    from cobra_ref.reference import RollingReference
+    from cobra_ref.gaits import RollingGait
     from cobra_ref.simulate import initial_state
 
     m, d = mj
-    q, _ = initial_state(cobra, RollingReference(), box_gap=-0.03)  # box 30 mm into the middle links
+    q, _ = initial_state(cobra, RollingGait(), box_gap=-0.03)  # box 30 mm into the middle links
     q[2] -= 0.0015  # robot spheres 0.5 mm into the ground
     d.qpos[:] = q
     d.qvel[:] = 0

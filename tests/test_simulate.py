@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from cobra_ref.reference import RollingReference
+from cobra_ref.gaits import RollingGait
 from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import initial_state, simulate
 from cobra_ref.stepper import SimulationError
@@ -12,7 +12,7 @@ from cobra_ref.stepper import SimulationError
 @pytest.fixture(scope="module")
 def rolling_push():
     """10 s of the built-in C rolling with the box beside the middle of the snake (defaults)."""
-    return simulate(cobra_model(), RollingReference(), 10.0)
+    return simulate(cobra_model(), RollingGait(), 10.0)
 
 
 def test_ten_seconds_of_rolling_push_the_box_without_nan_or_penetration(rolling_push):
@@ -49,7 +49,7 @@ def test_the_energy_ledger_closes_within_5_percent_of_the_work(rolling_push):
 
 def test_a_start_in_deep_penetration_is_refused_naming_the_body():
     model = cobra_model()
-    reference = RollingReference()
+    reference = RollingGait()
     q, qd = initial_state(model, reference)
     q[2] -= 0.02  # sink the whole robot 2 cm into the ground
     with pytest.raises(SimulationError, match=r"deep penetration: robot-ground contact on body '.+' is 1\d\.\d mm"):
@@ -59,7 +59,7 @@ def test_a_start_in_deep_penetration_is_refused_naming_the_body():
 def test_a_failure_mid_run_names_step_and_time_and_keeps_what_was_computed():
     """A reference that turns NaN after t = 0.02 s: step 20 (t = 0.020 s) needs q_ref(0.021)."""
     model = cobra_model()
-    rolling = RollingReference()
+    rolling = RollingGait()
 
     def breaks(t):
         q, qd, qdd = rolling(t)

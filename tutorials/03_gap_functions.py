@@ -21,7 +21,7 @@ from cobra_ref.contact import KINDS, ROBOT_BOX, contact_jacobian, find_contacts
 from cobra_ref.fastdyn import ChainModel
 from cobra_ref.gaps import box_corner_plane_gaps, box_corners, sphere_box_gap, sphere_plane_gap
 from cobra_ref.quaternion import rot_to_quat
-from cobra_ref.reference import RollingReference
+from cobra_ref.gaits import RollingGait
 from cobra_ref.simulate import initial_state
 
 np.set_printoptions(precision=4, suppress=True)
@@ -247,7 +247,7 @@ chain = ChainModel(cobra)
 box = cobra.boxes[0]
 i_L6 = cobra.body_names.index("L6")
 s_L6 = int(np.flatnonzero(cobra.spheres.body == i_L6)[0])
-q, qd = initial_state(cobra, RollingReference())
+q, qd = initial_state(cobra, RollingGait())
 yaw_q = [cobra.q_idx[i].start for i, jt in enumerate(cobra.joint_type) if jt == "Rz"]
 q[yaw_q] += 0.03 * rng.normal(size=len(yaw_q))
 

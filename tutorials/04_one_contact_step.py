@@ -17,7 +17,7 @@ import cobra_ref as cr
 from cobra_ref.contact import KINDS, ROBOT_BOX, contact_jacobian, find_contacts
 from cobra_ref.contact_qp import ContactQP, facet_directions, kkt_residuals
 from cobra_ref.fastdyn import ChainModel
-from cobra_ref.reference import RollingReference
+from cobra_ref.gaits import RollingGait
 from cobra_ref.simulate import initial_state
 from cobra_ref.stepper import Stepper
 
@@ -232,7 +232,7 @@ print(f"|p_T| / (mu p_N) = {np.linalg.norm(p_diag[1:]) / (mu * p_diag[0]):.4f}  
 # %% [markdown]
 # ## 6. Now the robot: COBRA lying on the ground next to the box
 # `cobra_model()` has the head (floating base), 11 joints and the box as a second free body:
-# nv = 23. The built-in `RollingReference()` starts at rest in a flat C shape (only the yaw
+# nv = 23. The built-in `RollingGait()` starts at rest in a flat C shape (only the yaw
 # joints are bent) and ramps up the rolling over 2 s. `initial_state` puts the robot in that
 # shape with its lowest sphere 1 mm above the ground. It puts the box on the ground with its
 # centre 0.12 m from the centre of the middle link L5 along +x, which is the concave side of
@@ -240,7 +240,7 @@ print(f"|p_T| / (mu p_N) = {np.linalg.norm(p_diag[1:]) / (mu * p_diag[0]):.4f}  
 
 # %%
 model = cr.cobra_model()
-ref = RollingReference()
+ref = RollingGait()
 q0, u0 = initial_state(model, ref, box_offset=(0.12, 0.0))
 m_robot, m_box = sum(model.mass[:12]), model.mass[12]
 weight = (m_robot + m_box) * grav                 # N

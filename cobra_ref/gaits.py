@@ -1,0 +1,180 @@
+"""The gait library: joint references q_ref(t), qd_ref(t), qdd_ref(t) for COBRA's 11 joints.
+
+Implements: the fixed-shape lateral rolling (C, S, J and the mirrored J) and the sidewinding of
+[COBRA] sec. "Results", written for COBRA's joints in notes B9 (joints i = 0..10 from the head,
+yaw Y = {0, 2, ..., 10}, pitch P = {1, 3, ..., 9}, s_i = i / 10, omega = 2 pi f)::
+
+    rolling:      theta_i = kappa_i cos(phi(t))             i in Y
+                  theta_i = kappa_i sin(phi(t))             i in P
+    sidewinding:  theta_i = A_y sin(phi(t) - Omega i)       i in Y
+                  theta_i = A_p sin(phi(t) - Omega i + delta)   i in P
+
+    phi(t) = phi_0 + integral_0^t omega r(s) ds,   r = smoothstep(t / T_ramp) = 3 s^2 - 2 s^3
+
+The *phase rate* is ramped in over T_ramp (default one period, 1 / f): the robot starts at
+rest (qd = qdd = 0 at t = 0) in the gait's shape at phi_0, and is at the steady gait from
+T_ramp on. (Ramping the amplitude instead stands a growing rolling arc up on its middle within
+half a cycle, and it falls over with an impact.)
+
+Bend profiles kappa_i of the rolling shapes (notes B9; defaults notes C10):
+
+    C          kappa_i = A                                 constant curvature, an arc
+    S          kappa_i = A cos(pi s_i)                     curvature changes sign at the middle (J5)
+    J          kappa_i = A for s_i <= s_J, else 0          a hook at the head, straight tail (s_J = 0.5)
+    J-mirror   the J reflected in the robot's vertical plane (y -> -y): yaw joints negated,
+               pitch joints unchanged (a reflection maps a rotation about y to itself)
+
+Every joint stays within |theta_i| <= A (rolling) or max(A_y, A_p) (sidewinding), which must be
+<= q_max = pi / 2 (assumption C4); bad values raise ``GaitError`` naming the parameter.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+N_JOINTS = 11
+Q_MAX = np.pi / 2  # joint range, assumption C4 (CobraParameters.q_max)
+YAW = np.arange(N_JOINTS) % 2 == 0  # even joints yaw, odd joints pitch
+S = np.arange(N_JOINTS) / (N_JOINTS - 1)  # s_i = i / 10
+SHAPES = ("C", "S", "J", "J-mirror")
+
+
+class GaitError(ValueError):
+    """A gait parameter that cannot be used (the message names it)."""
+
+
+def smoothstep(t: float, T: float):
+    """r, r', r'' of r(t) = 3 s^2 - 2 s^3, s = t / T clipped to [0, 1].
+
+    Helper: the ramp-in of every gait (module docstring).
+    """
+    if T <= 0:
+        return 1.0, 0.0, 0.0
+    s = min(max(t / T, 0.0), 1.0)
+    if s >= 1.0:
+        return 1.0, 0.0, 0.0
+    return 3 * s**2 - 2 * s**3, (6 * s - 6 * s**2) / T, (6 - 12 * s) / T**2
+
+
+def ramped_phase(t: float, omega: float, T: float):
+    """phi - phi_0, phi', phi'' with phi' = omega r(t): the integral of the smoothstep ramp.
+
+    Helper: for t < T, phi = omega T (s^3 - s^4 / 2), s = t / T; afterwards phi grows at omega.
+    """
+    r, rd, _ = smoothstep(t, T)
+    if T <= 0:
+        return omega * t, omega, 0.0
+    s = min(max(t / T, 0.0), 1.0)
+    phi = omega * T * (s**3 - s**4 / 2) + omega * max(t - T, 0.0)
+    return phi, omega * r, omega * rd
+
+
+def _check(name: str, value: float, low: float = 0.0, high: float = np.inf, strict: bool = True) -> None:
+    ok = np.isfinite(value) and (value > low if strict else value >= low) and value <= high
+    if not ok:
+        bound = f"in ({low}, {high}]" if strict else f"in [{low}, {high}]"
+        raise GaitError(f"{name} must be finite and {bound}, got {value}")
+
+
+@dataclass(frozen=True)
+class _Periodic:
+    """Frequency, phase offset and ramp shared by every gait (see the module docstring)."""
+
+    frequency: float = 0.5  # f [Hz] (notes C10)
+    phase: float = 0.0  # phi_0 [rad]
+    ramp_time: float | None = None  # T_ramp [s]; None = one period
+
+    def _phase(self, t: float):
+        T = 1.0 / self.frequency if self.ramp_time is None else self.ramp_time
+        phi, phid, phidd = ramped_phase(t, 2 * np.pi * self.frequency, T)
+        return self.phase + phi, phid, phidd
+
+    def _check_periodic(self) -> None:
+        _check("frequency", self.frequency, high=10.0)
+        _check("phase", self.phase, low=-np.inf)
+        if self.ramp_time is not None:
+            _check("ramp_time", self.ramp_time, strict=False)
+
+
+@dataclass(frozen=True)
+class RollingGait(_Periodic):
+    """Fixed-shape lateral rolling in the planar bend profile ``shape`` (C, S, J, J-mirror).
+
+    Implements: [COBRA] C-, S- and J-shaped lateral rolling (notes B9).
+    """
+
+    shape: str = "C"
+    amplitude: float = 0.5  # A [rad] (notes C10)
+    s_J: float = 0.5  # J only: the hook spans s_i <= s_J (notes C10)
+
+    def __post_init__(self):
+        if self.shape not in SHAPES:
+            raise GaitError(f"unknown rolling shape {self.shape!r}; use one of {', '.join(SHAPES)}")
+        _check("amplitude", self.amplitude, high=Q_MAX)
+        _check("s_J", self.s_J, strict=False, high=1.0)
+        self._check_periodic()
+
+    def kappa(self) -> np.ndarray:
+        """The bend profile kappa_i [rad] of the 11 joints (module docstring)."""
+        A = self.amplitude
+        if self.shape == "C":
+            return np.full(N_JOINTS, A)
+        if self.shape == "S":
+            return A * np.cos(np.pi * S)
+        hook = np.where(S <= self.s_J + 1e-12, A, 0.0)
+        return hook if self.shape == "J" else np.where(YAW, -hook, hook)
+
+    def __call__(self, t: float):
+        phi, phid, phidd = self._phase(t)
+        kappa = self.kappa()
+        q = kappa * np.where(YAW, np.cos(phi), np.sin(phi))
+        dq = kappa * np.where(YAW, -np.sin(phi), np.cos(phi))  # d theta / d phi
+        # chain rule: qd = dq phi', qdd = d2q phi'^2 + dq phi'', and d2q = -q for sines and cosines
+        return q, dq * phid, -q * phid**2 + dq * phidd
+
+
+@dataclass(frozen=True)
+class SidewindingGait(_Periodic):
+    """Sidewinding: the compound serpenoid with COBRA's parity (notes B9, defaults C10).
+
+    Implements: [COBRA] sidewinding (notes B9).
+    """
+
+    amplitude_yaw: float = 0.6  # A_y [rad]
+    amplitude_pitch: float = 0.6  # A_p [rad]
+    spatial_frequency: float = 0.57  # Omega [rad per joint], about one wavelength on the body
+    delta: float = np.pi / 4  # pitch-yaw phase offset [rad]
+
+    def __post_init__(self):
+        _check("amplitude_yaw", self.amplitude_yaw, high=Q_MAX)
+        _check("amplitude_pitch", self.amplitude_pitch, high=Q_MAX)
+        _check("spatial_frequency", self.spatial_frequency, low=-np.inf)
+        _check("delta", self.delta, low=-np.inf)
+        self._check_periodic()
+
+    def __call__(self, t: float):
+        phi, phid, phidd = self._phase(t)
+        i = np.arange(N_JOINTS)
+        arg = phi - self.spatial_frequency * i + np.where(YAW, 0.0, self.delta)
+        A = np.where(YAW, self.amplitude_yaw, self.amplitude_pitch)
+        q, dq = A * np.sin(arg), A * np.cos(arg)
+        return q, dq * phid, -q * phid**2 + dq * phidd
+
+
+GAITS = {
+    "rolling": lambda: RollingGait(shape="C"),  # the built-in reference's first name
+    "C": lambda: RollingGait(shape="C"),
+    "S": lambda: RollingGait(shape="S"),
+    "J": lambda: RollingGait(shape="J"),
+    "J-mirror": lambda: RollingGait(shape="J-mirror"),
+    "sidewinding": SidewindingGait,
+}
+
+
+def gait(name: str):
+    """A gait with its default parameters, by name; a clear error for an unknown one."""
+    if name not in GAITS:
+        raise GaitError(f"unknown gait {name!r}; gaits: {', '.join(GAITS)}")
+    return GAITS[name]()
