@@ -60,11 +60,8 @@ def cmd_export_mjcf(args) -> int:
 
 def write_text_atomic(path: str, text: str) -> None:
     """Write to a temporary file in the target directory, then rename: no partial file."""
+    _check_writable(path)
     directory = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(directory):
-        raise SystemExit(f"error: output directory does not exist: {directory}")
-    if not os.access(directory, os.W_OK):
-        raise SystemExit(f"error: output directory is not writable: {directory}")
     fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp_", suffix=os.path.basename(path))
     try:
         with os.fdopen(fd, "w") as f:

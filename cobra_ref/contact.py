@@ -24,6 +24,7 @@ import numpy as np
 
 from . import gaps as gapfn
 from .fastdyn import ChainModel, ChainTerms
+from .spatial import cross_rows
 
 KINDS = ("robot-ground", "robot-box", "box-ground")
 ROBOT_GROUND, ROBOT_BOX, BOX_GROUND = 0, 1, 2
@@ -112,9 +113,5 @@ def contact_jacobian(chain: ChainModel, terms: ChainTerms, contacts: Contacts) -
 def _point_jacobians(chain: ChainModel, terms: ChainTerms, body: np.ndarray, x: np.ndarray) -> np.ndarray:
     """(k, 3, nv) world Jacobians of the body-fixed points at world positions x (k, 3)."""
     S_ang, S_lin = terms.S[:3].T, terms.S[3:].T  # (nv, 3)
-    xs = x[:, None, :]
-    cross = np.stack([xs[..., 1] * S_ang[..., 2] - xs[..., 2] * S_ang[..., 1],
-                      xs[..., 2] * S_ang[..., 0] - xs[..., 0] * S_ang[..., 2],
-                      xs[..., 0] * S_ang[..., 1] - xs[..., 1] * S_ang[..., 0]], axis=-1)  # (k, nv, 3)
-    J = (S_lin[None] - cross) * chain.moves[body][:, :, None]
+    J = (S_lin[None] - cross_rows(x[:, None, :], S_ang[None])) * chain.moves[body][:, :, None]  # (k, nv, 3)
     return J.transpose(0, 2, 1)

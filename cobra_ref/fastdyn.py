@@ -26,7 +26,7 @@ import numpy as np
 
 from .model import Model, ModelError
 from .quaternion import quat_to_rot
-from .spatial import skew
+from .spatial import cross_rows, skew
 
 _AXIS = {"Rx": 0, "Ry": 1, "Rz": 2}
 
@@ -133,7 +133,7 @@ class ChainModel:
         S = np.zeros((6, model.nv))
         axes = R[self.rev_body, :, self.rev_axis]
         S[:3, self.rev_v] = axes.T
-        S[3:, self.rev_v] = _cross(p[self.rev_body], axes).T
+        S[3:, self.rev_v] = cross_rows(p[self.rev_body], axes).T
         free_dofs, free_c = [], []
         for i, jt in enumerate(model.joint_type):
             if jt != "free":
@@ -146,7 +146,7 @@ class ChainModel:
             # the free joint's velocity-product term in world coordinates: [0; -w_world x v_world]
             free_dofs.extend(range(iv.start, iv.stop))
             c = np.zeros((6, 6))
-            c[5, 3:] = -_cross(R[i] @ w_b, v_w)
+            c[5, 3:] = -cross_rows(R[i] @ w_b, v_w)
             free_c.append(c)
         return S, (np.array(free_dofs, dtype=int), np.concatenate(free_c))
 
@@ -199,20 +199,13 @@ def _skew_batch(w):
     return out
 
 
-def _cross(a, b):
-    """Row-wise cross product of (..., 3) arrays (np.cross is slow for small arrays)."""
-    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
-
-
 def _motion_cross(v, m):
     """Row-wise v x m for motion vectors ([RBDA] eq. 2.31), arrays (n, 6)."""
     w, vo = v[:, :3], v[:, 3:]
-    return np.concatenate([_cross(w, m[:, :3]), _cross(w, m[:, 3:]) + _cross(vo, m[:, :3])], axis=1)
+    return np.concatenate([cross_rows(w, m[:, :3]), cross_rows(w, m[:, 3:]) + cross_rows(vo, m[:, :3])], axis=1)
 
 
 def _force_cross(v, f):
     """Row-wise v x* f for force vectors ([RBDA] eq. 2.32), arrays (n, 6)."""
     w, vo = v[:, :3], v[:, 3:]
-    return np.concatenate([_cross(w, f[:, :3]) + _cross(vo, f[:, 3:]), _cross(w, f[:, 3:])], axis=1)
+    return np.concatenate([cross_rows(w, f[:, :3]) + cross_rows(vo, f[:, 3:]), cross_rows(w, f[:, 3:])], axis=1)

@@ -20,6 +20,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .spatial import cross_rows
+
 e_x, e_y, e_z = np.eye(3)
 
 
@@ -188,10 +190,7 @@ def contact_frames(n: np.ndarray, t_hint: np.ndarray) -> np.ndarray:
     seed = a - np.sum(a * n, axis=1, keepdims=True) * n
     t1 = np.where(use_hint[:, None], t_perp, seed)
     t1 = t1 / np.linalg.norm(t1, axis=1, keepdims=True)
-    t2 = np.stack([n[:, 1] * t1[:, 2] - n[:, 2] * t1[:, 1],
-                   n[:, 2] * t1[:, 0] - n[:, 0] * t1[:, 2],
-                   n[:, 0] * t1[:, 1] - n[:, 1] * t1[:, 0]], axis=1)
-    return np.stack([n, t1, t2], axis=2)
+    return np.stack([n, t1, cross_rows(n, t1)], axis=2)
 
 
 def sphere_box_gaps(centers: np.ndarray, radii: np.ndarray, R_box: np.ndarray, p_box: np.ndarray,

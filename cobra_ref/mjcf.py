@@ -96,8 +96,7 @@ def _add_joint(body: ET.Element, model: Model, i: int) -> None:
 def _add_geoms(body: ET.Element, model: Model, i: int) -> None:
     """Contact spheres of body i (named sphere_{i}_{k}), its box, and a visual-only cylinder."""
     mine = np.flatnonzero(model.spheres.body == i)
-    mu_rb = model.mu if model.mu_robot_box is None else min(model.mu_robot_box, model.mu)
-    friction = {"friction": _f([mu_rb, 0.005, 0.0001])}
+    friction = {"friction": _f([min(model.mu_rb, model.mu), 0.005, 0.0001])}
     for k, s in enumerate(mine):
         ET.SubElement(body, "geom", name=f"sphere_{i}_{k}", type="sphere", size=_f(model.spheres.radius[s]),
                       pos=_f(model.spheres.center[s]), **_ROBOT_BITS, **friction)

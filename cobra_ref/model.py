@@ -75,12 +75,17 @@ class Model:
     # body cylinders for pictures and the MJCF's visual geoms: (length, radius, x offset) per body
     visual_cylinders: tuple[tuple[float, float, float] | None, ...] = ()
     mu: float = 1.0  # Coulomb friction of robot-ground and box-ground contacts
-    mu_robot_box: float | None = None  # robot-box contacts; None = the same as mu
+    mu_robot_box: float | None = None  # robot-box contacts; None = the same as mu (see mu_rb)
     # derived in __post_init__
     X_tree: tuple[np.ndarray, ...] = field(init=False)
     I: tuple[np.ndarray, ...] = field(init=False)
     q_idx: tuple[slice, ...] = field(init=False)
     v_idx: tuple[slice, ...] = field(init=False)
+
+    @property
+    def mu_rb(self) -> float:
+        """Friction coefficient of robot-box contacts: mu_robot_box, or mu when that is None."""
+        return self.mu if self.mu_robot_box is None else self.mu_robot_box
 
     def __post_init__(self):
         _validate(self)

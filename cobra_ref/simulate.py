@@ -179,7 +179,7 @@ def meta(stepper: Stepper) -> dict:
     """What a run was made with (settings, friction, model), and the seconds spent per phase."""
     model = stepper.model
     return {"settings": asdict(stepper.s), "model": model.name, "nq": model.nq, "nv": model.nv,
-            "mu": model.mu, "mu_robot_box": model.mu if model.mu_robot_box is None else model.mu_robot_box,
+            "mu": model.mu, "mu_robot_box": model.mu_rb,
             "phase_seconds": dict(stepper.timing)}
 
 

@@ -34,6 +34,17 @@ def skew(w: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
+def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product a x b of (..., 3) arrays, broadcasting like numpy.
+
+    Helper: the batched 3-D cross product of the world-frame fast paths (np.cross is slow
+    for small arrays).
+    """
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
+
+
 def crm(v: np.ndarray) -> np.ndarray:
     """Motion cross product matrix: crm(v) @ m = v x m.
 

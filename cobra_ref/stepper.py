@@ -167,8 +167,7 @@ class Stepper:
 
     def _mu(self, contacts: Contacts) -> np.ndarray:
         """Friction coefficient per contact: model.mu, or model.mu_robot_box for robot-box pairs."""
-        mu_rb = self.model.mu if self.model.mu_robot_box is None else self.model.mu_robot_box
-        return np.where(contacts.kind == ROBOT_BOX, mu_rb, self.model.mu)
+        return np.where(contacts.kind == ROBOT_BOX, self.model.mu_rb, self.model.mu)
 
     def _remember(self, keys, p, w, contacts):
         """Warm starts and the sliding directions for the next step's contact frames."""
@@ -185,6 +184,7 @@ class Stepper:
 
     def reset(self):
         self._warm, self._hint = {}, {}
+        self.timing = dict.fromkeys(PHASES, 0.0)
 
 
 def _finite(values: np.ndarray, t: float) -> np.ndarray:

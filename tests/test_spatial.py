@@ -3,7 +3,7 @@
 import numpy as np
 
 from cobra_ref.quaternion import quat_exp, quat_mul, quat_to_rot, rot_to_quat
-from cobra_ref.spatial import crf, crm, force_X, inv_X, mcI, plux, rotx, roty, rotz, skew, swap_lin_ang, xlt
+from cobra_ref.spatial import crf, crm, cross_rows, force_X, inv_X, mcI, plux, rotx, roty, rotz, skew, swap_lin_ang, xlt
 
 
 def _random_X(rng):
@@ -87,3 +87,8 @@ def test_quaternion_matrix_round_trip_and_product(rng):
     np.testing.assert_allclose(q, a if a[0] >= 0 else -a, atol=1e-14)
     # rotation by pi/2 about z maps x to y
     np.testing.assert_allclose(quat_to_rot(quat_exp(np.array([0, 0, np.pi / 2]))) @ [1, 0, 0], [0, 1, 0], atol=1e-15)
+
+
+def test_cross_rows_equals_numpy_cross_with_broadcasting(rng):
+    a, b = rng.normal(size=(4, 1, 3)), rng.normal(size=(1, 5, 3))
+    np.testing.assert_allclose(cross_rows(a, b), np.cross(a, b), atol=1e-15)
