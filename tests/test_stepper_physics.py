@@ -320,7 +320,7 @@ def test_simulate_logs_one_torque_column_per_joint_of_the_model(n_locks):
 # ------------------------------------------------------------------- a sphere pushing the box
 
 
-def _pusher_and_box(mu, pusher_mass=0.5, pusher_radius=0.03):
+def _pusher_and_box(mu, pusher_mass=0.5, pusher_radius=0.03, mu_robot_box=None):
     """A sphere (a locked two-piece body, as above) and the box (body 2, its own free joint)."""
     pusher = _locked_rigid_body("pusher", pusher_mass, 0.4 * pusher_mass * pusher_radius**2 * np.eye(3),
                                 SphereSet(body=np.zeros(1, dtype=int), center=np.zeros((1, 3)),
@@ -330,7 +330,8 @@ def _pusher_and_box(mu, pusher_mass=0.5, pusher_radius=0.03):
               "q_limit", "tau_limit")
     merged = {k: getattr(pusher, k) + getattr(box, k) for k in fields}
     return Model(name="pusher_box", parent=pusher.parent + (-1,), gravity=pusher.gravity, spheres=pusher.spheres,
-                 boxes=(BoxGeom(body=2, half=np.full(3, BOX_SIDE / 2)),), mu=mu, **merged)
+                 boxes=(BoxGeom(body=2, half=np.full(3, BOX_SIDE / 2)),), mu=mu, mu_robot_box=mu_robot_box,
+                 **merged)
 
 
 @pytest.mark.parametrize("ratio", [0.5, 0.95, 1.05, 1.5])
@@ -369,3 +370,28 @@ def test_a_sphere_pushing_the_box_moves_it_only_once_the_push_exceeds_mu_m_g(rat
         x_expected = a * DT**2 * n_steps * (n_steps + 1) / 2
         np.testing.assert_allclose(box_x, x_expected, rtol=2e-3)
         assert abs(q[9]) < 1e-6 and abs(q[10] - BOX_SIDE / 2) < 1e-5, "straight, flat slide"
+
+
+def test_a_sphere_sliding_on_the_box_feels_the_robot_box_friction_not_the_ground_friction(T=0.05):
+    """Per-pair friction (assumption C22): the sphere slides on the box's top face with
+    mu_robot_box = 0.2 while the box stands on ground with mu = 0.5.
+
+    A solid sphere thrown at v0 = 0.5 m/s along x slides (it only starts rolling without slip at
+    t = 2 v0 / (7 mu_rb g) = 0.073 s), so each step friction takes mu_rb g dt off its speed:
+    v_N = v0 - N mu_rb g dt, 0.4019 m/s after 0.05 s (with mu = 0.5 it would be 0.2548).
+    The box stays put: the sphere's friction mu_rb m_s g = 0.98 N is below the ground's
+    mu (m_s + m_b) g = 4.9 N.
+    """
+    model = _pusher_and_box(mu=0.5, mu_robot_box=0.2)
+    q = np.zeros(model.nq)
+    q[:7] = [0.0, 0.0, BOX_SIDE + 0.03, 1.0, 0.0, 0.0, 0.0]  # sphere resting on the box's top face
+    q[8:15] = [0.0, 0.0, BOX_SIDE / 2, 1.0, 0.0, 0.0, 0.0]
+    qd = np.zeros(model.nv)
+    qd[0] = 0.5
+    stepper, hold = Stepper(model), _hold(1)
+    n_steps = int(round(T / DT))
+    for k in range(n_steps):
+        res = stepper.step(q, qd, k * DT, hold)
+        q, qd = res.q, res.qd
+    np.testing.assert_allclose(qd[0], 0.5 - n_steps * 0.2 * GRAVITY * DT, atol=1e-6)
+    assert abs(q[8]) < 1e-6, "the box must not move"
