@@ -164,17 +164,29 @@ class SidewindingGait(_Periodic):
 
 
 GAITS = {
-    "rolling": lambda: RollingGait(shape="C"),  # the built-in reference's first name
-    "C": lambda: RollingGait(shape="C"),
-    "S": lambda: RollingGait(shape="S"),
-    "J": lambda: RollingGait(shape="J"),
-    "J-mirror": lambda: RollingGait(shape="J-mirror"),
-    "sidewinding": SidewindingGait,
+    "rolling": (RollingGait, {"shape": "C"}),  # the built-in reference's first name
+    "C": (RollingGait, {"shape": "C"}),
+    "S": (RollingGait, {"shape": "S"}),
+    "J": (RollingGait, {"shape": "J"}),
+    "J-mirror": (RollingGait, {"shape": "J-mirror"}),
+    "sidewinding": (SidewindingGait, {}),
 }
 
 
-def gait(name: str):
-    """A gait with its default parameters, by name; a clear error for an unknown one."""
+def gait(name: str, **params):
+    """The gait ``name`` with its default parameters, or with ``params`` (the dataclass fields:
+    amplitude, frequency, phase, ramp_time, s_J, ... ) replacing them; a clear error for an
+    unknown gait or parameter."""
     if name not in GAITS:
         raise GaitError(f"unknown gait {name!r}; gaits: {', '.join(GAITS)}")
-    return GAITS[name]()
+    cls, fixed = GAITS[name]
+    allowed = [f for f in cls.__dataclass_fields__ if f not in fixed]
+    unknown = sorted(set(params) - set(allowed))
+    if unknown:
+        raise GaitError(f"unknown parameter(s) {', '.join(unknown)} for gait {name!r}; use {', '.join(allowed)}")
+    return cls(**fixed, **params)
+
+
+def gait_params(g) -> dict:
+    """The free parameters of a gait object as a JSON-ready dict (the inverse of ``gait``)."""
+    return {f: getattr(g, f) for f in g.__dataclass_fields__ if f != "shape"}

@@ -35,6 +35,7 @@ from .contact import KINDS, find_contacts
 from .contact_qp import ContactSolveError
 from .kinematics import forward_kinematics
 from .model import Model
+from .quaternion import quat_exp, quat_mul
 from .gaits import N_JOINTS
 from .robots import neutral_q
 from .stepper import SimulationError, StepSettings, Stepper
@@ -79,12 +80,21 @@ class Trajectory:
             "error": self.error or None,
         }
 
+    @classmethod
+    def from_npz(cls, path: str) -> "Trajectory":
+        """Read back what ``to_npz`` wrote."""
+        with np.load(path, allow_pickle=False) as z:
+            return cls(float(z["dt"]), z["t"], z["q"], z["qd"], z["tau"], z["box_pose"],
+                       {k: z[k] for k in STEP_KEYS}, {k: z[k] for k in CONTACT_KEYS},
+                       float(z["wall_time"]), str(z["error"]), json.loads(str(z["meta"])))
+
     def to_npz(self, path: str) -> None:
         """Write every array to an NPZ atomically (temporary file + rename: never half-written)."""
         directory = os.path.dirname(os.path.abspath(path)) or "."
         if not os.path.isdir(directory):
             raise OSError(f"output directory does not exist: {directory}")
         arrays = dict(t=self.t, q=self.q, qd=self.qd, tau=self.tau, box_pose=self.box_pose, dt=np.array(self.dt),
+                      wall_time=np.array(self.wall_time),
                       meta=np.array(json.dumps(self.meta)), error=np.array(self.error), **self.steps, **self.contacts)
         fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp_", suffix=".npz")
         os.close(fd)
@@ -96,7 +106,8 @@ class Trajectory:
                 os.unlink(tmp)
 
 
-def initial_state(model: Model, reference, box_offset=None, box_gap: float = 0.05, clearance: float = 1e-3):
+def initial_state(model: Model, reference, box_offset=None, box_gap: float = 0.05, clearance: float = 1e-3,
+                  box_direction=None):
     """Robot at rest in the reference's t = 0 shape, head at the origin facing +x, lowest sphere
     ``clearance`` above the ground; the box resting flat on the ground beside the middle of the
     snake (assumption C9).
@@ -106,11 +117,17 @@ def initial_state(model: Model, reference, box_offset=None, box_gap: float = 0.0
     to the robot's centre of mass. The box's centre goes to middle + (r + a/2 + box_gap) d,
     turned so that one face looks back at the robot: ``box_gap`` (default 0.05 m, C9) is then
     the clearance between that face and the middle link's cylinder. ``box_offset`` = (dx, dy)
-    instead puts the box centre at middle + (dx, dy), axis-aligned.
+    instead puts the box centre at middle + (dx, dy), axis-aligned; ``box_direction`` = (dx, dy)
+    replaces the concave side d by that horizontal direction (sidewinding pushes with its
+    leading side: ``reproduce`` passes the direction the gait travels).
+
+    The robot's base is first turned so that its start shape lies on its flattest side
+    (``_rest_on_flattest_side``; no turn for the planar rolling shapes).
     """
     q = neutral_q(model)
     act_q = [model.q_idx[i].start for i, jt in enumerate(model.joint_type) if jt != "free"]
     q[act_q] = reference(0.0)[0]
+    q[3:7] = _rest_on_flattest_side(model, q)
     kin = forward_kinematics(model, q)
     sph = model.spheres
     bottoms = [kin.p[b][2] + (kin.R[b] @ c)[2] - r for b, c, r in zip(sph.body, sph.center, sph.radius)]
@@ -126,7 +143,11 @@ def initial_state(model: Model, reference, box_offset=None, box_gap: float = 0.0
             centre, yaw = middle[:2] + np.asarray(box_offset, dtype=float), 0.0
         else:
             d = (np.average(com, axis=0, weights=[model.mass[i] for i in robot]) - middle)[:2]
-            if np.linalg.norm(d) < 1e-3:  # a straight or symmetric S shape: use the body's left side
+            if box_direction is not None:
+                d = np.asarray(box_direction, dtype=float)[:2]
+                if not (np.all(np.isfinite(d)) and np.linalg.norm(d) > 0):
+                    raise ValueError(f"box_direction must be a finite non-zero (dx, dy), got {box_direction}")
+            elif np.linalg.norm(d) < 1e-3:  # a straight or symmetric S shape: use the body's left side
                 d = kin.R[mid_bodies[0]][:2, 1]
             d = d / np.linalg.norm(d)
             r = max(sph.radius[np.isin(sph.body, mid_bodies)])
@@ -136,8 +157,30 @@ def initial_state(model: Model, reference, box_offset=None, box_gap: float = 0.0
     return q, np.zeros(model.nv)
 
 
+def _rest_on_flattest_side(model: Model, q) -> np.ndarray:
+    """Base quaternion that turns the robot's best-fit plane horizontal (a 3-D start shape, such as
+    sidewinding's, then lies on its flattest side instead of standing on its tips and falling).
+
+    Helper: the plane through the robot bodies' centres of mass with the least variance across
+    it (its normal n is the last right singular vector of the centred points); the base turns by
+    the smallest rotation taking n (chosen with n_z >= 0) to z. A planar shape (every rolling
+    gait at t = 0) has n = z already, so it is left as it is.
+    """
+    kin = forward_kinematics(model, q)
+    robot = [i for i in range(model.nb) if not any(b.body == i for b in model.boxes)]
+    com = np.array([kin.p[i] + kin.R[i] @ model.com[i] for i in robot])
+    n = np.linalg.svd(com - com.mean(axis=0))[2][-1]
+    n = n if n[2] >= 0 else -n
+    axis = np.cross(n, [0.0, 0.0, 1.0])
+    if np.linalg.norm(axis) < 1e-9:
+        return q[3:7].copy()
+    angle = np.arctan2(np.linalg.norm(axis), n[2])
+    turn = quat_exp(angle * axis / np.linalg.norm(axis))
+    return quat_mul(turn, q[3:7])
+
+
 def simulate(model: Model, reference, duration: float, settings: StepSettings = StepSettings(), q0=None,
-             qd0=None, progress=None, box_offset=None) -> Trajectory:
+             qd0=None, progress=None, box_offset=None, box_direction=None) -> Trajectory:
     """Simulate ``duration`` seconds; return a Trajectory (see the module docstring for fields).
 
     Raises ``SimulationError`` for a bad duration, an initial state in deep penetration, or a
@@ -147,7 +190,7 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
     if not (np.isfinite(duration) and duration > 0):
         raise SimulationError(f"duration must be positive and finite, got {duration}")
     if q0 is None:
-        q0, qd0 = initial_state(model, reference, box_offset)
+        q0, qd0 = initial_state(model, reference, box_offset, box_direction=box_direction)
     q, qd = model.check_q(q0).copy(), model.check_qd(np.zeros(model.nv) if qd0 is None else qd0).copy()
     stepper = Stepper(model, settings)
     _check_start(stepper, q, qd)

@@ -1,0 +1,167 @@
+"""Energy, work and contact analysis of a simulated trajectory (figures 4-9 of [COBRA]).
+
+Implements: the work and power definitions of notes C18 (the paper plots them, it does not
+define them). For the N steps k of a trajectory with midpoint velocities
+u_mid,k = (u_k + u_k+1) / 2 (the velocity at which the stepper's energy ledger closes exactly)::
+
+    P_loc,k      = sum_j tau_j,k qdot_j,k                  locomotion power [W]      (fig. 7)
+    |P|_loc,k    = sum_j |tau_j,k qdot_j,k|                absolute power: motors cannot recover
+                                                           the energy they brake, so this is the
+                                                           energy the actuators must supply
+    W_loc(t_k)   = sum_{i<k} |P|_loc,i dt                  locomotion work [J]       (fig. 6, x)
+    W_box(t_k)   = sum_{i<k} sum_c f_c . v_box(p_c) dt     work done ON the box by the robot's
+                                                           contacts c (robot-box) [J] (fig. 6, y)
+    v_box(p)     = v_box + omega_box x (p - x_box)         the box's velocity at the point p
+    d_box(t)     = |x_box(t) - x_box(0)|  (horizontal)     distance the box moved [m] (fig. 9)
+
+f_c is the force ON the box; the contact log stores the force on body A (the robot link) by B
+(the box), so f_c = -contact_force. Inefficiency (fig. 6) is the slope dW_loc / dW_box: the
+locomotion work spent per joule done on the box; ``efficiency_slope`` fits it over the run.
+
+Convention: the box is the last free body (its 7 coordinates are the last of q and its 6
+velocities, world linear then body angular, the last of qd), as in ``robots.cobra_model``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND
+from .quaternion import quat_to_rot
+
+N_JOINTS = 11
+JOINT_VELOCITIES = slice(6, 6 + N_JOINTS)  # the joint rates in qd (after the head's 6 base velocities)
+
+
+def joint_rates(traj) -> np.ndarray:
+    """(N, 11) joint velocities at each step's midpoint, (u_k + u_k+1) / 2.
+
+    Helper: the qdot_j of notes C18.
+    """
+    qd = traj.qd[:, JOINT_VELOCITIES]
+    return 0.5 * (qd[:-1] + qd[1:])
+
+
+def locomotion_power(traj) -> tuple[np.ndarray, np.ndarray]:
+    """(P_loc, |P|_loc), each (N,) [W]: sum_j tau_j qdot_j and sum_j |tau_j qdot_j|.
+
+    Implements: notes C18, locomotion power (paper fig. 7).
+    """
+    per_joint = traj.tau * joint_rates(traj)
+    return per_joint.sum(axis=1), np.abs(per_joint).sum(axis=1)
+
+
+def locomotion_work(traj) -> np.ndarray:
+    """(N+1,) cumulative locomotion work W_loc(t) = integral sum_j |tau_j qdot_j| dt [J], W_loc(0) = 0.
+
+    Implements: notes C18, locomotion work (paper fig. 6, horizontal axis).
+    """
+    return np.concatenate([[0.0], np.cumsum(locomotion_power(traj)[1] * traj.dt)])
+
+
+def box_point_velocity(traj, steps: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(n, 3) world velocity of the box at world points ``points`` at the midpoints of ``steps``.
+
+    Helper: v_box(p) = v + R omega_body x (p - x_box), with the box pose at the step's start.
+    """
+    qd_box = 0.5 * (traj.qd[steps, -6:] + traj.qd[steps + 1, -6:])
+    pose = traj.box_pose[steps]
+    R = np.array([quat_to_rot(quat) for quat in pose[:, 3:]]).reshape(-1, 3, 3)
+    omega = np.einsum("kij,kj->ki", R, qd_box[:, 3:])
+    return qd_box[:, :3] + np.cross(omega, points - pose[:, :3])
+
+
+def contact_power_on_box(traj, kind: int) -> np.ndarray:
+    """(N,) power [W] of the contacts of ``kind`` on the box, sum_c f_c . v_box(p_c).
+
+    Helper: for robot-box contacts the force on the box is minus the logged force (which acts on
+    the robot link); for box-ground contacts the box is body A and the logged force acts on it.
+    """
+    c = traj.contacts
+    rows = np.flatnonzero(c["contact_kind"] == kind)
+    steps = c["contact_step"][rows].astype(int)
+    force = c["contact_force"][rows] * (-1.0 if kind == ROBOT_BOX else 1.0)
+    v = box_point_velocity(traj, steps, c["contact_point"][rows])
+    return np.bincount(steps, weights=np.einsum("ki,ki->k", force, v), minlength=len(traj.tau))
+
+
+def box_work(traj) -> np.ndarray:
+    """(N+1,) cumulative work W_box(t) done on the box by the robot's contacts [J], W_box(0) = 0.
+
+    Implements: notes C18, work on the box (paper fig. 6, vertical axis).
+    """
+    return np.concatenate([[0.0], np.cumsum(contact_power_on_box(traj, ROBOT_BOX) * traj.dt)])
+
+
+def box_distance(traj) -> np.ndarray:
+    """(N+1,) horizontal distance of the box from its start, |x_box(t) - x_box(0)| [m].
+
+    Implements: the box distance of [COBRA] fig. 9.
+    """
+    d = traj.box_pose[:, :2] - traj.box_pose[0, :2]
+    return np.linalg.norm(d, axis=1)
+
+
+def efficiency_slope(traj) -> float:
+    """Least-squares slope of W_loc against W_box through the origin [J/J] (fig. 6 inefficiency);
+    inf when the robot does no work on the box.
+
+    Helper: the number behind the paper's "more efficient gaits need less work in locomotion to
+    do more work on the box": slope = sum W_box W_loc / sum W_box^2 over the samples.
+    """
+    w_loc, w_box = locomotion_work(traj), box_work(traj)
+    den = float(w_box @ w_box)
+    return float(w_box @ w_loc / den) if den > 1e-12 else float("inf")
+
+
+class ContactForces(NamedTuple):
+    """Per step and per body, the summed normal and tangential contact force magnitudes [N]."""
+
+    normal: np.ndarray  # (N, n_bodies)
+    tangential: np.ndarray  # (N, n_bodies)
+    in_contact: np.ndarray  # (N, n_bodies) bool
+
+
+def contact_forces(traj, kind: int, n_bodies: int) -> ContactForces:
+    """Normal f_N = f . n and tangential |f_T| = |f - f_N n| contact forces of ``kind``, summed per
+    body A and step.
+
+    Implements: the contact-force decomposition of [COBRA] figs. 4 and 5 (f_N, f_T; eq. (2)).
+    """
+    c = traj.contacts
+    rows = np.flatnonzero(c["contact_kind"] == kind)
+    f, n = c["contact_force"][rows], c["contact_normal"][rows]
+    f_N = np.einsum("ki,ki->k", f, n)
+    f_T = np.linalg.norm(f - f_N[:, None] * n, axis=1)
+    normal, tangential = np.zeros((len(traj.tau), n_bodies)), np.zeros((len(traj.tau), n_bodies))
+    steps, bodies = c["contact_step"][rows].astype(int), c["contact_body"][rows].astype(int)
+    np.add.at(normal, (steps, bodies), f_N)
+    np.add.at(tangential, (steps, bodies), f_T)
+    return ContactForces(normal, tangential, normal > 0)
+
+
+def summary(traj) -> dict:
+    """The numbers the claims report needs, from one trajectory (JSON-ready floats)."""
+    p, p_abs = locomotion_power(traj)
+    w_loc, w_box = locomotion_work(traj), box_work(traj)
+    d = traj.box_pose[-1, :2] - traj.box_pose[0, :2]
+    return {
+        "duration": float(traj.t[-1] - traj.t[0]),
+        "locomotion_work": float(w_loc[-1]),
+        "box_work": float(w_box[-1]),
+        "efficiency_slope": efficiency_slope(traj),
+        "peak_abs_power": float(p_abs.max(initial=0.0)),
+        "mean_abs_power": float(p_abs.mean()) if len(p_abs) else 0.0,
+        "box_displacement": [float(d[0]), float(d[1])],
+        "box_distance": float(np.linalg.norm(d)),
+        "robot_box_steps": int(len(np.unique(traj.contacts["contact_step"][traj.contacts["contact_kind"] == ROBOT_BOX]))),
+        "max_tau_excess": float(traj.steps["tau_excess"].max(initial=-np.inf)),
+        "fixed_point_converged": float(np.mean(traj.steps["osqp_status"] != 3)) if len(traj.tau) else 1.0,
+    }
+
+
+__all__ = ["joint_rates", "locomotion_power", "locomotion_work", "box_point_velocity", "contact_power_on_box",
+           "box_work", "box_distance", "efficiency_slope", "ContactForces", "contact_forces", "summary",
+           "ROBOT_GROUND", "ROBOT_BOX", "BOX_GROUND"]

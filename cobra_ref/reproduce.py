@@ -1,0 +1,202 @@
+"""Run the paper's gaits for the figures: one simulation per gait, cached, both cores in use.
+
+Helper: the simulation half of ``cobra-ref figures`` ([COBRA] sec. "Results", figs. 3-9).
+
+Each gait run is a ``RunSpec``: the gait's name and parameters, the duration, dt and the robot-box
+friction. Its result is the ``Trajectory`` NPZ of ``cobra-ref simulate``, stored in the cache
+directory under ``<gait>-<key>.npz``, where key = SHA-256 of every input: the spec, the model
+parameters (``CobraParameters``), the stepper settings and the source code of every module the
+simulation runs (so editing the physics invalidates the cache, editing a figure does not).
+A run that fails mid-way is stored as ``<gait>-<key>.failed.npz`` with what it computed and its
+error, and the figures use that partial trajectory (the claims report says so).
+
+Box placement per gait (assumption C9, extended):
+
+* C, S, J, J-mirror: the box starts 5 cm from the middle link on the concave side of the start
+  shape, one face turned to the robot (``simulate.initial_state``). For S, whose shape has no
+  single concave side at the middle, it is the side the robot's centre of mass lies on.
+* sidewinding moves sideways along the ground instead of rolling in place, so its box goes 5 cm
+  from the middle link in the direction the gait *travels*: the horizontal displacement of the
+  robot's centre of mass in a box-free run of the same gait over two periods (``travel_direction``,
+  computed and cached with the run, reported in the trajectory's ``meta``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, field, replace
+
+import numpy as np
+
+from . import __version__
+from .gaits import gait, gait_params
+from .params import CobraParameters
+from .robots import cobra_model
+from .simulate import Trajectory, initial_state, simulate
+from .stepper import SimulationError, StepSettings
+
+PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
+# the modules whose source decides a simulation's result (part of the cache key)
+PHYSICS_MODULES = ("params", "spatial", "quaternion", "joints", "model", "robots", "kinematics", "fastdyn",
+                   "gaps", "contact", "contact_qp", "stepper", "simulate", "gaits", "reproduce")
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One gait run: the gait, its parameters (empty = the defaults of notes C10), and the settings."""
+
+    gait: str
+    duration: float = 10.0
+    dt: float = 1e-3
+    params: dict = field(default_factory=dict, hash=False)
+    mu_robot_box: float | None = None
+
+    def reference(self):
+        return gait(self.gait, **self.params)
+
+    def cobra_parameters(self) -> CobraParameters:
+        p = CobraParameters()
+        return p if self.mu_robot_box is None else replace(p, mu_robot_box=self.mu_robot_box)
+
+    def key(self) -> str:
+        """SHA-256 of every input of the run (module docstring)."""
+        here = os.path.dirname(os.path.abspath(__file__))
+        h = hashlib.sha256()
+        record = {"spec": asdict(self), "gait": gait_params(self.reference()),
+                  "cobra": asdict(self.cobra_parameters()), "settings": asdict(StepSettings(dt=self.dt)),
+                  "version": __version__}
+        h.update(json.dumps(record, sort_keys=True, default=str).encode())
+        for name in PHYSICS_MODULES:
+            with open(os.path.join(here, name + ".py"), "rb") as f:
+                h.update(f.read())
+        return h.hexdigest()
+
+    def filename(self) -> str:
+        return f"{self.gait}-{self.key()[:16]}.npz"
+
+
+def travel_direction(spec: RunSpec, periods: float = 2.0) -> np.ndarray:
+    """Unit horizontal direction in which the gait moves the robot's centre of mass, measured in a
+    box-free run over ``periods`` periods (at most the run's duration) from the same start.
+
+    Helper: the sidewinding box placement (module docstring).
+    """
+    model = cobra_model(with_box=False)
+    ref = spec.reference()
+    duration = min(spec.duration, periods / ref.frequency)
+    traj = simulate(model, ref, duration, StepSettings(dt=spec.dt))
+    robot = range(model.nb)
+    from .kinematics import forward_kinematics
+
+    def com(q):
+        kin = forward_kinematics(model, q)
+        pts = np.array([kin.p[i] + kin.R[i] @ model.com[i] for i in robot])
+        return np.average(pts, axis=0, weights=[model.mass[i] for i in robot])[:2]
+
+    d = com(traj.q[-1]) - com(traj.q[0])
+    if np.linalg.norm(d) < 1e-6:
+        raise SimulationError(f"gait {spec.gait!r} does not move the robot in {duration} s; "
+                              "cannot place the box in its path")
+    return d / np.linalg.norm(d)
+
+
+def run(spec: RunSpec, cache_dir: str, force: bool = False, progress=None) -> tuple[Trajectory, bool]:
+    """The trajectory of ``spec``, from the cache when it holds this exact run (unless ``force``),
+    else simulated and stored. Returns (trajectory, came_from_cache)."""
+    path = os.path.join(cache_dir, spec.filename())
+    failed = path[:-4] + ".failed.npz"
+    if not force:
+        for p in (path, failed):
+            if os.path.isfile(p):
+                return Trajectory.from_npz(p), True
+    model = cobra_model(spec.cobra_parameters(), with_box=True)
+    ref = spec.reference()
+    direction = travel_direction(spec) if spec.gait == "sidewinding" else None
+    q0, qd0 = initial_state(model, ref, box_direction=direction)
+    try:
+        traj = simulate(model, ref, spec.duration, StepSettings(dt=spec.dt), q0, qd0, progress=progress)
+        out = path
+    except SimulationError as exc:
+        if exc.trajectory is None:
+            raise
+        traj, out = exc.trajectory, failed
+    traj.meta.update({"gait": spec.gait, "gait_params": gait_params(ref), "cache_key": spec.key(),
+                      "box_direction": None if direction is None else [float(x) for x in direction]})
+    os.makedirs(cache_dir, exist_ok=True)
+    traj.to_npz(out)
+    return traj, False
+
+
+def _run_in_worker(spec: RunSpec, cache_dir: str, force: bool, queue):
+    """Process-pool entry: run one spec, reporting (gait, done, total) to ``queue``."""
+    report = None if queue is None else (lambda done, total: queue.put((spec.gait, done, total)))
+    traj, cached = run(spec, cache_dir, force, report)
+    return spec.gait, cached
+
+
+def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = None,
+            progress: bool = True) -> dict:
+    """Run every spec (in parallel on ``workers`` processes, default: the machine's cores) and
+    return {gait: Trajectory}. Progress on stderr: each gait's percentage and the time left."""
+    specs = list(specs)
+    workers = workers or min(len(specs), os.cpu_count() or 1)
+    todo = [s for s in specs if force or not _cached(s, cache_dir)]
+    if todo and workers > 1 and len(todo) > 1:
+        import multiprocessing
+
+        with multiprocessing.Manager() as manager:
+            queue = manager.Queue()
+            with ProcessPoolExecutor(workers) as pool:
+                futures = [pool.submit(_run_in_worker, s, cache_dir, force, queue) for s in todo]
+                _watch(futures, queue, todo, progress)
+                for f in futures:
+                    f.result()  # re-raises a worker's exception here
+    else:
+        for s in todo:
+            run(s, cache_dir, force, _printer(s.gait) if progress else None)
+    return {s.gait: run(s, cache_dir)[0] for s in specs}
+
+
+def _cached(spec: RunSpec, cache_dir: str) -> bool:
+    path = os.path.join(cache_dir, spec.filename())
+    return os.path.isfile(path) or os.path.isfile(path[:-4] + ".failed.npz")
+
+
+def _printer(name: str):
+    start = time.perf_counter()
+
+    def show(done, total):
+        left = (time.perf_counter() - start) / done * (total - done)
+        sys.stderr.write(f"\r  {name}: {100 * done / total:5.1f} %, {left:4.0f} s left ")
+        if done == total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+    return show
+
+
+def _watch(futures, queue, specs, progress: bool) -> None:
+    """Print the status of all running gaits until every future is done: one line rewritten in
+    place on a terminal, a new line every 10 s otherwise (logs, CI)."""
+    start, state = time.perf_counter(), {s.gait: (0, 1) for s in specs}
+    tty, last = sys.stderr.isatty(), 0.0
+    while not all(f.done() for f in futures):
+        time.sleep(0.5)
+        while not queue.empty():
+            name, done, total = queue.get()
+            state[name] = (done, total)
+        elapsed = time.perf_counter() - start
+        if progress and (tty or elapsed - last >= 10.0):
+            last = elapsed
+            frac = sum(d / t for d, t in state.values()) / len(state)
+            left = f"~{elapsed / frac * (1 - frac):4.0f} s left" if frac > 0 else "estimating time left"
+            parts = "  ".join(f"{k} {100 * d / t:3.0f}%" for k, (d, t) in state.items())
+            sys.stderr.write(("\r" if tty else "") + f"  simulating: {parts}  {left} " + ("" if tty else "\n"))
+            sys.stderr.flush()
+    if progress and tty:
+        sys.stderr.write("\n")
