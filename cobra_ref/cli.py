@@ -59,18 +59,11 @@ def cmd_export_mjcf(args) -> int:
 
 
 def write_text_atomic(path: str, text: str) -> None:
-    """Write to a temporary file in the target directory, then rename: no partial file."""
+    """Check the directory (a clear error), then write through a temporary file and a rename."""
+    from .regenerate import write_atomic
+
     _check_writable(path)
-    directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp_", suffix=os.path.basename(path))
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    write_atomic(path, text)
 
 
 @contextlib.contextmanager
@@ -166,6 +159,28 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def cmd_figures(args) -> int:
+    """Regenerate figures 3-9, the GIFs and the claims report (``regenerate`` module)."""
+    from .reproduce import PAPER_GAITS
+    from .regenerate import check_output_dir, regenerate
+
+    gaits = PAPER_GAITS if args.gaits is None else tuple(g.strip() for g in args.gaits.split(","))
+    unknown = [g for g in gaits if g not in PAPER_GAITS]
+    if unknown:
+        raise SystemExit(f"error: unknown gait(s) {', '.join(unknown)}; gaits: {', '.join(PAPER_GAITS)}")
+    try:
+        check_output_dir(args.out)
+    except OSError as exc:
+        raise SystemExit(f"error: {exc}")
+    with c_stdout_to_stderr():
+        result = regenerate(args.out, quick=args.quick, force=args.force, cache_dir=args.cache,
+                            workers=args.jobs, mujoco=not args.no_mujoco, progress=not args.quiet, gaits=gaits)
+    print(json.dumps({"out": args.out, "files": len(result["files"]),
+                      "claims": {c["id"]: c["holds"] for c in result["claims"]},
+                      "seconds": round(result["seconds"], 1)}))
+    return 0
+
+
 def _finite_float(text: str) -> float:
     """argparse type: a float, rejected if not finite (the message names the value)."""
     try:
@@ -218,6 +233,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo comparison")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=cmd_bench)
+
+    p = sub.add_parser("figures", help="regenerate the paper's figures 3-9, GIFs and the claims report",
+                       description="Simulate the five gaits (10 s each; 1 s with --quick) on all cores, or read "
+                                   "them from the cache, and write fig03_snapshots.png ... fig09_box_distance.png "
+                                   "(+ PDF), anim_<gait>.gif, claims.json, claims.md and summary.json to --out. "
+                                   "Prints a one-line JSON summary.")
+    p.add_argument("--out", default="figures", help="output directory (default figures)")
+    p.add_argument("--quick", action="store_true", help="1 s simulations instead of 10 s (for tests)")
+    p.add_argument("--force", action="store_true", help="ignore the cache: simulate and draw everything again")
+    p.add_argument("--cache", default=None, help="simulation cache directory (default OUT/.cache)")
+    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: the number of cores)")
+    p.add_argument("--gaits", default=None, help="comma-separated subset of C,S,J,J-mirror,sidewinding")
+    p.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo rollout cross-check")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=cmd_figures)
     return parser
 
 
