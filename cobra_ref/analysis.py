@@ -8,15 +8,16 @@ u_mid,k = (u_k + u_k+1) / 2 (the velocity at which the stepper's energy ledger c
     |P|_loc,k    = sum_j |tau_j,k qdot_j,k|                absolute power: motors cannot recover
                                                            the energy they brake, so this is the
                                                            energy the actuators must supply
-    W_loc(t_k)   = sum_{i<k} |P|_loc,i dt                  locomotion work [J]       (fig. 6, x)
+    W_loc(t_k)   = sum_{i<k} |P|_loc,i dt                  locomotion work [J]       (fig. 6, vertical)
     W_box(t_k)   = sum_{i<k} sum_c f_c . v_box(p_c) dt     work done ON the box by the robot's
-                                                           contacts c (robot-box) [J] (fig. 6, y)
+                                                           contacts c (robot-box) [J] (fig. 6, horizontal)
     v_box(p)     = v_box + omega_box x (p - x_box)         the box's velocity at the point p
     d_box(t)     = |x_box(t) - x_box(0)|  (horizontal)     distance the box moved [m] (fig. 9)
 
 f_c is the force ON the box; the contact log stores the force on body A (the robot link) by B
 (the box), so f_c = -contact_force. Inefficiency (fig. 6) is the slope dW_loc / dW_box: the
-locomotion work spent per joule done on the box; ``efficiency_slope`` fits it over the run.
+locomotion work spent per joule done on the box; ``efficiency_fit`` fits a line over the push
+(from the first robot-box contact on).
 
 Convention: the box is the last free body (its 7 coordinates are the last of q and its 6
 velocities, world linear then body angular, the last of qd), as in ``robots.cobra_model``.
@@ -56,7 +57,7 @@ def locomotion_power(traj) -> tuple[np.ndarray, np.ndarray]:
 def locomotion_work(traj) -> np.ndarray:
     """(N+1,) cumulative locomotion work W_loc(t) = integral sum_j |tau_j qdot_j| dt [J], W_loc(0) = 0.
 
-    Implements: notes C18, locomotion work (paper fig. 6, horizontal axis).
+    Implements: notes C18, locomotion work (paper fig. 6, vertical axis).
     """
     return np.concatenate([[0.0], np.cumsum(locomotion_power(traj)[1] * traj.dt)])
 
@@ -90,7 +91,7 @@ def contact_power_on_box(traj, kind: int) -> np.ndarray:
 def box_work(traj) -> np.ndarray:
     """(N+1,) cumulative work W_box(t) done on the box by the robot's contacts [J], W_box(0) = 0.
 
-    Implements: notes C18, work on the box (paper fig. 6, vertical axis).
+    Implements: notes C18, work on the box (paper fig. 6, horizontal axis).
     """
     return np.concatenate([[0.0], np.cumsum(contact_power_on_box(traj, ROBOT_BOX) * traj.dt)])
 
@@ -104,16 +105,35 @@ def box_distance(traj) -> np.ndarray:
     return np.linalg.norm(d, axis=1)
 
 
-def efficiency_slope(traj) -> float:
-    """Least-squares slope of W_loc against W_box through the origin [J/J] (fig. 6 inefficiency);
-    inf when the robot does no work on the box.
+def efficiency_fit(traj) -> tuple[float, float]:
+    """(slope, intercept) of the least-squares line W_loc = slope W_box + intercept over the push,
+    the samples from the first robot-box contact on; (inf, nan) when the robot does no work on
+    the box.
 
     Helper: the number behind the paper's "more efficient gaits need less work in locomotion to
-    do more work on the box": slope = sum W_box W_loc / sum W_box^2 over the samples.
+    do more work on the box" (fig. 6): the slope is the locomotion work spent per joule done on
+    the box while pushing [J/J], lower = more efficient. The intercept absorbs the locomotion
+    work spent before the robot reaches the box, which is not the push's cost.
     """
     w_loc, w_box = locomotion_work(traj), box_work(traj)
-    den = float(w_box @ w_box)
-    return float(w_box @ w_loc / den) if den > 1e-12 else float("inf")
+    touching = np.flatnonzero(traj.contacts["contact_kind"] == ROBOT_BOX)
+    if not len(touching):
+        return float("inf"), float("nan")
+    k0 = int(traj.contacts["contact_step"][touching].min())
+    x, y = w_box[k0:], w_loc[k0:]
+    var = float(np.var(x))
+    if var <= 1e-18:
+        return float("inf"), float("nan")
+    slope = float(np.mean((x - x.mean()) * (y - y.mean())) / var)
+    return slope, float(y.mean() - slope * x.mean())
+
+
+def efficiency_slope(traj) -> float:
+    """The slope of ``efficiency_fit`` [J/J]: locomotion work per joule done on the box.
+
+    Helper: fig. 6's inefficiency, one number per gait.
+    """
+    return efficiency_fit(traj)[0]
 
 
 class ContactForces(NamedTuple):
@@ -143,7 +163,12 @@ def contact_forces(traj, kind: int, n_bodies: int) -> ContactForces:
 
 
 def summary(traj) -> dict:
-    """The numbers the claims report needs, from one trajectory (JSON-ready floats)."""
+    """The numbers the claims report needs, from one trajectory (JSON-ready floats).
+
+    Helper: W_loc(T), W_box(T), the efficiency slope, peak and mean |P_loc|, the box's
+    displacement and distance, and the run's health (robot-box steps, torque excess, the share
+    of steps whose friction fixed point converged).
+    """
     p, p_abs = locomotion_power(traj)
     w_loc, w_box = locomotion_work(traj), box_work(traj)
     d = traj.box_pose[-1, :2] - traj.box_pose[0, :2]
@@ -163,5 +188,5 @@ def summary(traj) -> dict:
 
 
 __all__ = ["joint_rates", "locomotion_power", "locomotion_work", "box_point_velocity", "contact_power_on_box",
-           "box_work", "box_distance", "efficiency_slope", "ContactForces", "contact_forces", "summary",
+           "box_work", "box_distance", "efficiency_fit", "efficiency_slope", "ContactForces", "contact_forces", "summary",
            "ROBOT_GROUND", "ROBOT_BOX", "BOX_GROUND"]

@@ -101,9 +101,12 @@ def mujoco_claims(rows: list[dict]) -> list[dict]:
     """
     out = []
     for r in rows:
-        out.append({"id": f"MJC-{r['gait']}",
-                    "claim": f"MuJoCo (soft contact) moves the box like cobra_ref for {r['gait']}: {r['band']}",
-                    "values": {k: v for k, v in r.items() if k not in ("gait", "band", "holds")},
+        band = r["band"]
+        text = (f"MuJoCo (soft contact, joints imposed) moves the box like cobra_ref for {r['gait']}: direction "
+                f"within {band['max_angle_deg']:g} deg, length ratio within [1/{band['max_ratio']:g}, "
+                f"{band['max_ratio']:g}], when either moves it {1000 * band['min_displacement']:g} mm or more")
+        keys = ("ours_displacement", "mujoco_displacement", "angle_deg", "ratio", "reason", "max_penetration")
+        out.append({"id": f"MJC-{r['gait']}", "claim": text, "values": {k: r.get(k) for k in keys},
                     "holds": r["holds"]})
     return out
 

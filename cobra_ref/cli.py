@@ -8,7 +8,6 @@ import dataclasses
 import json
 import os
 import sys
-import tempfile
 import time
 
 import numpy as np
@@ -60,10 +59,10 @@ def cmd_export_mjcf(args) -> int:
 
 def write_text_atomic(path: str, text: str) -> None:
     """Check the directory (a clear error), then write through a temporary file and a rename."""
-    from .regenerate import write_atomic
+    from .atomic import write_text
 
     _check_writable(path)
-    write_atomic(path, text)
+    write_text(path, text)
 
 
 @contextlib.contextmanager

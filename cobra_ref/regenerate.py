@@ -21,33 +21,15 @@ from __future__ import annotations
 
 import hashlib
 import importlib
-import inspect
 import json
 import os
 import sys
-import tempfile
 import time
 
+from .atomic import write_text
 from .reproduce import PAPER_GAITS, RunSpec, run_all
 
 FULL_DURATION, QUICK_DURATION = 10.0, 1.0
-
-
-def write_atomic(path: str, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same directory and a rename.
-
-    Helper: no half-written outputs.
-    """
-    directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp_", suffix=os.path.basename(path))
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def check_output_dir(out_dir: str) -> None:
@@ -76,7 +58,10 @@ def specs_for(gaits=PAPER_GAITS, quick: bool = False, dt: float = 1e-3, params: 
 def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = False, cache_dir: str | None = None,
                workers: int | None = None, mujoco: bool = True, progress: bool = True, gaits=PAPER_GAITS,
                params: dict | None = None) -> dict:
-    """Run steps 1-3 of the module docstring; return {"files": [...], "claims": [...], "seconds": ...}."""
+    """Run steps 1-3 of the module docstring; return {"files": [...], "claims": [...], "seconds": ...}.
+
+    Helper: the body of ``cobra-ref figures``.
+    """
     from . import claims as claims_mod
     from .figures import FIGURES
     from .robots import cobra_model
@@ -103,7 +88,7 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
         t0 = time.perf_counter()
         written = module.make(results, out_dir, model)
         stamps[name] = {"stamp": stamp, "files": written}
-        write_atomic(stamps_path, json.dumps(stamps, indent=1))
+        write_text(stamps_path, json.dumps(stamps, indent=1))
         files += written
         _say(progress, f"  {name}: {len(written)} file(s), {time.perf_counter() - t0:.1f} s")
     summaries = claims_mod.gait_summaries(results)
@@ -118,21 +103,46 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
              "claims.md": claims_mod.to_markdown(report, summaries, settings),
              "summary.json": json.dumps(_clean({"gaits": summaries, "settings": settings}), indent=1)}
     for fname, text in paths.items():
-        write_atomic(os.path.join(out_dir, fname), text)
+        write_text(os.path.join(out_dir, fname), text)
         files.append(os.path.join(out_dir, fname))
     return {"files": files, "claims": report, "seconds": time.perf_counter() - start}
 
 
 def _mujoco_rows(results, out_dir, progress, files) -> list[dict]:
-    """The MuJoCo cross-check claims (empty when mujoco is not installed)."""
-    return []
+    """The MuJoCo rollout cross-check (design brief sec. 7) as claims, and its figure; empty, with
+    a note on stderr, when mujoco is not installed (it is an optional extra)."""
+    from . import claims as claims_mod
+    from .mujoco_rollout import cross_check, mujoco_available
+
+    if not mujoco_available():
+        _say(progress, "  MuJoCo cross-check skipped: mujoco is not installed (pip install mujoco)")
+        return []
+    done = {g: r for g, r in results.items() if not r.error}
+    if not done:
+        return []
+    first = next(iter(done.values()))
+    ours = {g: r.box_pose[-1, :2] - r.box_pose[0, :2] for g, r in done.items()}
+    directions = {g: r.meta.get("box_direction") for g, r in done.items()}
+    params = {g: r.meta.get("gait_params", {}) for g, r in done.items()}
+    t0 = time.perf_counter()
+    rows = cross_check(list(done), first.duration, first.dt, ours=ours, box_directions=directions, params=params)
+    from .figures.mujoco_check import make as make_figure
+
+    files += make_figure(rows, out_dir)
+    _say(progress, f"  MuJoCo cross-check: {len(rows)} gaits, {time.perf_counter() - t0:.1f} s")
+    return claims_mod.mujoco_claims(rows)
 
 
 def _stamp(keys: dict, module) -> str:
-    text = json.dumps(keys, sort_keys=True) + inspect.getsource(module)
-    common = importlib.import_module(".figures.common", __package__)
-    text += inspect.getsource(common)
-    return hashlib.sha256(text.encode()).hexdigest()
+    """Hash of the simulations' cache keys, the figure module's name and the source of the whole
+    figures package (figures share drawing code: the GIFs reuse fig. 3's)."""
+    here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "figures")
+    h = hashlib.sha256((json.dumps(keys, sort_keys=True) + module.__name__).encode())
+    for name in sorted(os.listdir(here)):
+        if name.endswith(".py"):
+            with open(os.path.join(here, name), "rb") as f:
+                h.update(f.read())
+    return h.hexdigest()
 
 
 def _read_json(path: str) -> dict:

@@ -107,7 +107,10 @@ def travel_direction(spec: RunSpec, periods: float = 2.0) -> np.ndarray:
 
 def run(spec: RunSpec, cache_dir: str, force: bool = False, progress=None) -> tuple[Trajectory, bool]:
     """The trajectory of ``spec``, from the cache when it holds this exact run (unless ``force``),
-    else simulated and stored. Returns (trajectory, came_from_cache)."""
+    else simulated and stored. Returns (trajectory, came_from_cache).
+
+    Helper: one gait run of the figure command (module docstring: cache key, box placement).
+    """
     path = os.path.join(cache_dir, spec.filename())
     failed = path[:-4] + ".failed.npz"
     if not force:
@@ -142,7 +145,10 @@ def _run_in_worker(spec: RunSpec, cache_dir: str, force: bool, queue):
 def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = None,
             progress: bool = True) -> dict:
     """Run every spec (in parallel on ``workers`` processes, default: the machine's cores) and
-    return {gait: Trajectory}. Progress on stderr: each gait's percentage and the time left."""
+    return {gait: Trajectory}. Progress on stderr: each gait's percentage and the time left.
+
+    Helper: the figure command's simulations; a worker's exception is raised here.
+    """
     specs = list(specs)
     workers = workers or min(len(specs), os.cpu_count() or 1)
     todo = [s for s in specs if force or not _cached(s, cache_dir)]

@@ -25,12 +25,12 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import time
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from .atomic import atomic_write
 from .contact import KINDS, find_contacts
 from .contact_qp import ContactSolveError
 from .kinematics import forward_kinematics
@@ -96,14 +96,7 @@ class Trajectory:
         arrays = dict(t=self.t, q=self.q, qd=self.qd, tau=self.tau, box_pose=self.box_pose, dt=np.array(self.dt),
                       wall_time=np.array(self.wall_time),
                       meta=np.array(json.dumps(self.meta)), error=np.array(self.error), **self.steps, **self.contacts)
-        fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp_", suffix=".npz")
-        os.close(fd)
-        try:
-            np.savez_compressed(tmp, **arrays)
-            os.replace(tmp, path)
-        finally:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
+        atomic_write(path, lambda tmp: np.savez_compressed(tmp, **arrays))
 
 
 def initial_state(model: Model, reference, box_offset=None, box_gap: float = 0.05, clearance: float = 1e-3,

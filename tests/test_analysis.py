@@ -81,22 +81,23 @@ def test_box_work_by_hand(pushing_run):
     assert analysis.box_work(traj)[-1] == pytest.approx(total, rel=1e-12)
 
 
-def test_efficiency_slope_is_the_least_squares_slope():
-    """For W_loc = 3 W_box exactly the slope is 3; with no work on the box it is infinite."""
-
-    class Fake:
-        dt = 0.1
-
-    fake = Fake()
-    w_box = np.linspace(0.0, 1.0, 11)
-    analysis_fns = (analysis.locomotion_work, analysis.box_work)
-    try:
-        analysis.locomotion_work, analysis.box_work = (lambda t: 3 * w_box), (lambda t: w_box)
-        assert analysis.efficiency_slope(fake) == pytest.approx(3.0)
-        analysis.box_work = lambda t: 0 * w_box
-        assert analysis.efficiency_slope(fake) == float("inf")
-    finally:
-        analysis.locomotion_work, analysis.box_work = analysis_fns
+def test_efficiency_fit_is_the_least_squares_line_over_the_push(pushing_run, monkeypatch):
+    """With W_loc = 3 W_box + 2 from the first robot-box contact on (and anything before it), the
+    fit returns slope 3 and intercept 2; with no robot-box contact the slope is infinite."""
+    traj = pushing_run
+    k0 = int(traj.contacts["contact_step"][traj.contacts["contact_kind"] == analysis.ROBOT_BOX].min())
+    w_box = np.concatenate([np.zeros(k0), np.linspace(0.0, 1.0, len(traj.t) - k0)])
+    w_loc = 3 * w_box + 2
+    w_loc[:k0] = np.linspace(0.0, 2.0, k0)  # the approach: work without any on the box
+    monkeypatch.setattr(analysis, "box_work", lambda t: w_box)
+    monkeypatch.setattr(analysis, "locomotion_work", lambda t: w_loc)
+    slope, intercept = analysis.efficiency_fit(traj)
+    assert slope == pytest.approx(3.0) and intercept == pytest.approx(2.0)
+    assert analysis.efficiency_slope(traj) == pytest.approx(3.0)
+    no_push = dict(traj.contacts, contact_kind=np.where(traj.contacts["contact_kind"] == analysis.ROBOT_BOX, 0,
+                                                         traj.contacts["contact_kind"]))
+    monkeypatch.setattr(traj, "contacts", no_push)
+    assert analysis.efficiency_slope(traj) == float("inf")
 
 
 def test_box_distance(pushing_run):

@@ -1,0 +1,101 @@
+"""Fig. 5: the box's contacts: robot-box and box-ground normal and tangential forces.
+
+The paper's fig. 5 shows, for the C, S, J and sidewinding gaits, the contact forces "of the
+manipulated object with the robot and with the ground", split into normal f_N and tangential
+f_T. Here each gait is one row of two panels, both from ``analysis.contact_forces``:
+
+* robot-box (``ROBOT_BOX``): f_N (solid) and |f_T| (dashed) [N] summed over all links touching
+  the box at each step; the links that touched it are named in the panel;
+* box-ground (``BOX_GROUND``): f_N (solid) and |f_T| (dashed) [N] summed over the box's corners,
+  with the box's weight m g dotted for reference (f_N = m g when nothing else pushes down).
+
+f_N = f . n and |f_T| = |f - f_N n| for the contact force f of the log; the magnitudes are the
+same on either body of a contact pair (action = reaction).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.lines import Line2D
+
+from ..analysis import BOX_GROUND, ROBOT_BOX, contact_forces
+from . import common
+
+
+def plot_normal_tangential(ax, t: np.ndarray, f_N: np.ndarray, f_T: np.ndarray, color: str) -> bool:
+    """f_N solid and |f_T| dashed over time [N]; "no contact" and False when both are zero.
+
+    Helper: one force panel of fig. 5.
+    """
+    if len(t) == 0 or not (np.any(f_N) or np.any(f_T)):
+        common.empty_panel(ax)
+        return False
+    ax.plot(*common.minmax_decimate(t, f_N), color=color)
+    ax.plot(*common.minmax_decimate(t, f_T), color=color, ls="--", lw=0.8)
+    ax.set_ylim(bottom=0.0)
+    common.robust_ylim(ax, np.concatenate([f_N, f_T]))
+    return True
+
+
+def plot_box_ground(ax, model, traj, t: np.ndarray, color: str) -> None:
+    """Box-ground f_N and |f_T| [N] (summed over the corners) and the box's weight m g dotted.
+
+    Helper: the right-hand panel of fig. 5.
+    """
+    box = common.box_body(model)
+    if box is None:
+        common.empty_panel(ax, "no box in the model")
+        return
+    bg = contact_forces(traj, BOX_GROUND, model.nb)
+    if plot_normal_tangential(ax, t, bg.normal[:, box], bg.tangential[:, box], color):
+        ax.axhline(-model.mass[box] * model.gravity[2], color="0.3", ls=":", lw=0.8)
+
+
+def touching_links(model, in_contact: np.ndarray) -> str:
+    """Names of the bodies that touched the box at least once, e.g. "L5, L6".
+
+    Helper: the "contact points" of the paper's fig. 5, as a list of links.
+    """
+    bodies = np.flatnonzero(in_contact.any(axis=0))
+    return ", ".join(model.body_names[i] for i in bodies)
+
+
+@common.paper_style
+def make(results: dict, out_dir: str, model) -> list[str]:
+    """Write ``fig05_box_contacts.png/.pdf``: per gait, robot-box and box-ground normal and
+    tangential forces over time.
+
+    Implements: [COBRA] fig. 5 with ``analysis.contact_forces`` of kinds ROBOT_BOX and BOX_GROUND.
+    """
+    rows = common.ordered(results)
+    fig = common.new_figure(common.TWO_COLUMN, 1.2 * max(len(rows), 1) + 0.5)
+    axes = fig.subplots(max(len(rows), 1), 2, sharex=True, squeeze=False)
+    if not rows:
+        common.empty_panel(axes[0, 0], "no gait to show")
+    for r, (gait, traj) in enumerate(rows):
+        color, t = common.gait_color(gait), common.step_times(traj)
+        rb = contact_forces(traj, ROBOT_BOX, model.nb)
+        if plot_normal_tangential(axes[r, 0], t, rb.normal.sum(axis=1), rb.tangential.sum(axis=1), color):
+            axes[r, 0].text(0.01, 0.97, "links: " + touching_links(model, rb.in_contact),
+                            transform=axes[r, 0].transAxes, va="top", fontsize=6)
+        plot_box_ground(axes[r, 1], model, traj, t, color)
+        for ax in axes[r]:
+            ax.set_ylabel(f"{common.gait_label(gait, traj)}\nforce [N]", color=color)
+    axes[0, 0].set_title("robot-box contact (sum over links)")
+    axes[0, 1].set_title("box-ground contact (sum over corners)")
+    _legend(fig)
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    return common.save(fig, out_dir, "fig05_box_contacts")
+
+
+def _legend(fig) -> None:
+    """One legend for the line styles, above the panels."""
+    handles = [Line2D([], [], color="0.2", label=r"normal $f_N$"),
+               Line2D([], [], color="0.2", ls="--", lw=0.8, label=r"tangential $\|f_T\|$"),
+               Line2D([], [], color="0.3", ls=":", lw=0.8, label="box weight $mg$")]
+    fig.legend(handles=handles, loc="outside upper center", ncol=3)
+
+
+if __name__ == "__main__":
+    common.main(make)
