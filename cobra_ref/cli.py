@@ -12,6 +12,7 @@ import time
 
 import numpy as np
 
+from .parallel import limit_blas_threads
 from .params import CobraParameters, parameter_table
 from .robots import cobra_model
 
@@ -66,18 +67,21 @@ def write_text_atomic(path: str, text: str) -> None:
 
 
 @contextlib.contextmanager
-def c_stdout_to_stderr():
-    """Send what C libraries print on file descriptor 1 (OSQP's "Polishing not needed ...")
-    to stderr, so that stdout carries only the command's own output (the JSON summary)."""
+def c_stdout_silenced():
+    """Discard what C libraries print on file descriptor 1 while the block runs: OSQP prints
+    "Polishing not needed ..." once per solve even with verbose off, thousands of lines per run.
+    stdout then carries only the command's own output (its JSON line, printed after the block);
+    progress goes to stderr."""
     sys.stdout.flush()
-    saved = os.dup(1)
+    saved, devnull = os.dup(1), os.open(os.devnull, os.O_WRONLY)
     try:
-        os.dup2(2, 1)
+        os.dup2(devnull, 1)
         yield
     finally:
         sys.stdout.flush()
         os.dup2(saved, 1)
         os.close(saved)
+        os.close(devnull)
 
 
 def _progress(label: str):
@@ -106,9 +110,12 @@ def _check_writable(path: str) -> None:
 
 def cmd_simulate(args) -> int:
     """Simulate COBRA and the box; write the trajectory NPZ; print a one-line JSON summary."""
+    if args.params:
+        from .cli_optimize import cmd_simulate_params
+
+        return cmd_simulate_params(args)
     from .reference import ReferenceError, builtin_reference, load_reference
-    from .simulate import simulate
-    from .stepper import SimulationError, StepSettings
+    from .stepper import StepSettings
 
     # check every input before the (long) run, so that bad input writes nothing
     _check_writable(args.out)
@@ -124,20 +131,33 @@ def cmd_simulate(args) -> int:
         model = cobra_model(params)
     except ValueError as exc:
         raise SystemExit(f"error: {exc}") from None
-    progress = None if args.quiet else _progress(f"simulate {args.reference or args.gait}")
+    run_and_write(model, reference, 10.0 if args.duration is None else args.duration, settings, args.out,
+                  f"simulate {args.reference or args.gait}", args.quiet)
+    return 0
+
+
+def run_and_write(model, reference, duration, settings, out, label, quiet=False, q0=None, qd0=None,
+                  meta=None, summary=None):
+    """Simulate, write the NPZ and print the one-line JSON summary (plus ``summary(traj)``'s keys);
+    a failure mid-run writes what was computed to OUT.failed.npz and exits with the error."""
+    from .simulate import simulate
+    from .stepper import SimulationError
+
+    progress = None if quiet else _progress(label)
     try:
-        with c_stdout_to_stderr():
-            traj = simulate(model, reference, args.duration, settings, progress=progress)
+        with c_stdout_silenced():
+            traj = simulate(model, reference, duration, settings, q0, qd0, progress=progress)
     except SimulationError as exc:
         if exc.trajectory is None:  # bad input: nothing was computed, nothing is written
             raise SystemExit(f"error: {exc}") from None
-        failed = os.path.splitext(args.out)[0] + ".failed.npz"
+        failed = os.path.splitext(out)[0] + ".failed.npz"
         exc.trajectory.to_npz(failed)
         print(json.dumps(exc.trajectory.summary()))
         raise SystemExit(f"error: {exc}\nwhat was computed up to the failure is in {failed}") from None
-    traj.to_npz(args.out)
-    print(json.dumps(traj.summary()))
-    return 0
+    traj.meta.update(meta or {})
+    traj.to_npz(out)
+    print(json.dumps({**traj.summary(), **(summary(traj) if summary else {})}))
+    return traj
 
 
 def cmd_bench(args) -> int:
@@ -148,7 +168,7 @@ def cmd_bench(args) -> int:
         _check_writable(args.json)
     if not (np.isfinite(args.duration) and args.duration > 0):
         raise SystemExit(f"error: duration must be positive and finite, got {args.duration}")
-    with c_stdout_to_stderr():
+    with c_stdout_silenced():
         record = run_bench(args.duration, with_mujoco=not args.no_mujoco,
                            progress=None if args.quiet else _progress("bench"))
     print(format_table(record))
@@ -171,7 +191,7 @@ def cmd_figures(args) -> int:
         check_output_dir(args.out)
     except OSError as exc:
         raise SystemExit(f"error: {exc}")
-    with c_stdout_to_stderr():
+    with c_stdout_silenced():
         result = regenerate(args.out, quick=args.quick, force=args.force, cache_dir=args.cache,
                             workers=args.jobs, mujoco=not args.no_mujoco, progress=not args.quiet, gaits=gaits)
     print(json.dumps({"out": args.out, "files": len(result["files"]),
@@ -216,7 +236,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="a gait with its default parameters: C (default), S, J, J-mirror (lateral rolling, "
                           "A = 0.5 rad, 0.5 Hz), sidewinding (A = 0.6 rad); 'rolling' = C")
     src.add_argument("--reference", metavar="FILE", help="reference file: .npz (t, q) or .csv (t,J0..J10)")
-    p.add_argument("--duration", type=_finite_float, default=10.0, help="simulated time [s] (default 10)")
+    src.add_argument("--params", metavar="FILE", help="replay an optimum of 'cobra-ref optimize' (gait, parameters, "
+                                                     "start state, dt, horizon)")
+    p.add_argument("--duration", type=_finite_float, default=None,
+                   help="simulated time [s] (default 10; with --params the optimization's horizon)")
     p.add_argument("--dt", type=_finite_float, default=1e-3, help="time step [s] (default 1e-3)")
     p.add_argument("--servo", choices=("prescribed", "pd"), default="prescribed",
                    help="joint servo (default prescribed: the joints follow the reference exactly)")
@@ -247,12 +270,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo rollout cross-check")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_figures)
+
+    from .cli_optimize import add_parsers as add_optimize_parsers
+
+    add_optimize_parsers(sub)
     return parser
 
 
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    # one BLAS thread: the matrices are 23 x 23, where threads cost more than they save
+    # (parallel.limit_blas_threads; 4x on a loaded machine, bit-identical results)
+    limit_blas_threads(1)
     if not getattr(args, "func", None):
         parser.print_help()
         return 2

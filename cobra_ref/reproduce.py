@@ -35,6 +35,7 @@ import numpy as np
 
 from . import __version__
 from .gaits import gait, gait_params
+from .parallel import worker_init
 from .params import CobraParameters
 from .robots import cobra_model
 from .simulate import Trajectory, initial_state, simulate
@@ -157,7 +158,7 @@ def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = No
 
         with multiprocessing.Manager() as manager:
             queue = manager.Queue()
-            with ProcessPoolExecutor(workers) as pool:
+            with ProcessPoolExecutor(workers, initializer=worker_init) as pool:
                 futures = [pool.submit(_run_in_worker, s, cache_dir, force, queue) for s in todo]
                 _watch(futures, queue, todo, progress)
                 for f in futures:

@@ -9,7 +9,8 @@ MODULES = ["spatial", "quaternion", "joints", "kinematics", "dynamics", "gaps", 
            "fastdyn", "stepper", "analysis", "claims", "reproduce", "regenerate", "mujoco_rollout", "atomic",
            "figures.common", "figures.fig03_snapshots", "figures.fig04_robot_contacts", "figures.fig05_box_contacts",
            "figures.fig06_work_efficiency", "figures.fig07_power", "figures.fig08_torques",
-           "figures.fig09_box_distance", "figures.animate", "figures.mujoco_check"]
+           "figures.fig09_box_distance", "figures.animate", "figures.mujoco_check", "shooting", "parallel",
+           "cli_optimize"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -1,0 +1,286 @@
+"""Single shooting (cobra_ref.shooting, cobra-ref optimize): worked examples on a tiny problem.
+
+The tiny problem: the C gait over 0.3 s (ramp 0.1 s), the box 5 mm from the middle link (instead
+of 5 cm, so that a short rollout already pushes it), one decision parameter (the frequency in
+[0.5, 1.5] Hz), goal 5 cm ahead of the box. At the initial guess (0.5 Hz) the box moves about
+2 cm; at 1 Hz about 5 cm, close to the goal. A rollout costs 2-10 s, so the file keeps to about
+ten of them.
+"""
+
+import argparse
+import dataclasses
+import json
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pytest
+
+from cobra_ref import shooting as sh
+from cobra_ref.cli_optimize import add_parsers, cmd_simulate_params, params_reference
+
+GOAL = (0.05, -0.01)
+
+
+def tiny_problem(**kw):
+    args = dict(duration=0.3, ramp_time=0.1, box_gap=0.005, decision=("frequency",),
+                bounds={"frequency": (0.5, 1.5)})
+    return sh.make_problem("C", kw.pop("goal", GOAL), **{**args, **kw})
+
+
+@pytest.fixture(scope="module")
+def problem():
+    return tiny_problem()
+
+
+@pytest.fixture(scope="module")
+def serial_result(problem):
+    """One compass poll (step 0.5 of the range: the poll point is 1 Hz), serially: 2 rollouts."""
+    return sh.optimize(problem, maxiter=1, step=0.5, executor=sh.SerialExecutor())
+
+
+@pytest.fixture(scope="module")
+def params_file(serial_result, tmp_path_factory):
+    path = tmp_path_factory.mktemp("opt") / "params.json"
+    sh.write_result(serial_result, str(path))
+    return path
+
+
+def run_cli(argv):
+    parser = argparse.ArgumentParser(prog="cobra-ref")
+    add_parsers(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(argv)
+    return args.func(args)
+
+
+# --- the optimizer --------------------------------------------------------------------------------
+
+
+def test_optimizer_lowers_the_cost_and_brings_the_box_closer_to_the_goal(serial_result):
+    """The shooting method's purpose: J(p*) < J(p0), and the box ends nearer the goal."""
+    first, best = serial_result.history[0], serial_result.best
+    assert first["params"] == {"frequency": 0.5}, "the first rollout is the initial guess"
+    assert best["cost"] < first["cost"], f"cost {first['cost']} -> {best['cost']}"
+    assert best["box_distance_to_goal"] < 0.5 * first["box_distance_to_goal"], \
+        f"box distance {first['box_distance_to_goal']} -> {best['box_distance_to_goal']}"
+    assert [e["rollout"] for e in serial_result.history] == list(range(len(serial_result.history)))
+    assert not serial_result.interrupted
+
+
+def test_cost_terms_add_up_to_the_cost(serial_result, problem):
+    """J = w_e E + w_g (d_T / d_0)^2 + w_tau P_tau + w_q P_q, with d_0 = |goal| (module docstring)."""
+    w = problem.weights
+    for e in serial_result.history:
+        t = e["terms"]
+        expected = w.effort * t["effort"] + w.goal * t["goal"] + w.tau * t["tau_limit"] + w.q * t["q_limit"]
+        np.testing.assert_allclose(e["cost"], expected, rtol=1e-14, err_msg=f"rollout {e['rollout']}")
+        np.testing.assert_allclose(np.sqrt(t["goal"]) * np.hypot(*GOAL), e["box_distance_to_goal"], rtol=1e-12)
+
+
+def test_optimum_meets_the_contact_conditions_and_reports_the_limits(serial_result, problem):
+    """Every step of the optimum solved eq. (6): p_N w_N ~ 0 (f_ext orthogonal to the gap rates) and
+    p inside the friction cone. Joint limits hold by construction (prescribed joints, A <= q_max);
+    the torque limit is exceeded only in the few impact steps, and the penalty counts exactly those."""
+    c = problem.cobra_parameters()
+    report = serial_result.best["contact"]
+    assert report["max_complementarity"] < 1e-2, report  # [N s m/s]; impulses ~1e-2 N s, speeds ~0.1 m/s
+    assert report["max_cone_residual"] < 1e-6, report
+    assert report["max_q_excess"] <= 0.0, report
+    assert report["fraction_over_tau_max"] < 0.1, report
+    assert report["rms_tau_over_tau_max"] < 1.0, report
+    traj = sh.rollout(problem, [serial_result.best["params"]["frequency"]])
+    excess = np.maximum(traj.steps["tau_excess"], 0.0)
+    np.testing.assert_allclose(serial_result.best["terms"]["tau_limit"],
+                               traj.dt * excess.sum() / (c.tau_max * problem.duration), rtol=1e-12)
+    assert np.count_nonzero(excess) == report["steps_over_tau_max"]
+
+
+def test_serial_executor_and_process_pool_give_the_same_result(serial_result, problem):
+    """The rollouts are deterministic and each batch is collected in order: any executor, same result."""
+    with ProcessPoolExecutor(2) as pool:
+        pooled = sh.optimize(problem, maxiter=1, step=0.5, executor=pool)
+    keys = ("params", "cost", "box_distance_to_goal", "terms", "box_final")
+    assert [{k: e[k] for k in keys} for e in pooled.history] == \
+           [{k: e[k] for k in keys} for e in serial_result.history]
+    assert pooled.best["cost"] == serial_result.best["cost"]
+
+
+def test_ctrl_c_keeps_the_best_rollout_found_so_far(problem, tmp_path):
+    """A KeyboardInterrupt during the second batch: the first rollout is kept, flagged interrupted."""
+
+    class InterruptSecondBatch(sh.SerialExecutor):
+        calls = 0
+
+        def submit(self, fn, /, *args, **kwargs):
+            InterruptSecondBatch.calls += 1
+            if InterruptSecondBatch.calls > 1:
+                raise KeyboardInterrupt
+            return super().submit(fn, *args, **kwargs)
+
+    result = sh.optimize(problem, maxiter=3, executor=InterruptSecondBatch())
+    assert result.interrupted and len(result.history) == 1
+    record = sh.write_result(result, str(tmp_path / "p.json"))
+    assert record["interrupted"] is True and record["params"]["frequency"] == 0.5
+
+
+# --- generic searches on a function known in closed form -----------------------------------------------
+
+
+def bowl(xs):
+    """f(x) = (x0 - 0.3)^2 + 2 (x1 + 0.2)^2, minimum 0 at (0.3, -0.2)."""
+    return [float((x[0] - 0.3) ** 2 + 2 * (x[1] + 0.2) ** 2) for x in xs]
+
+
+def test_compass_search_converges_to_the_minimum_of_a_bowl_within_the_mesh():
+    """Compass search: at convergence every poll point at the final step is no better, so the
+    minimiser lies within one mesh step (step < min_step) of the iterate."""
+    x, f, message = sh.compass_search(bowl, [0.0, 0.0], [-1, -1], [1, 1], maxiter=50, min_step=1 / 64)
+    assert message.startswith("converged")
+    np.testing.assert_allclose(x, [0.3, -0.2], atol=2 / 64)
+
+
+def test_compass_search_stays_in_the_bounds():
+    seen = []
+    sh.compass_search(lambda xs: seen.extend(xs) or bowl(xs), [0.9, 0.9], [0.5, 0.5], [1, 1], maxiter=10)
+    assert np.all(np.array(seen) >= 0.5) and np.all(np.array(seen) <= 1.0)
+
+
+def test_differential_evolution_is_deterministic_for_a_seed_and_starts_from_x0():
+    """scipy's DE through our batch map: x0 is the first member, the same seed gives the same run."""
+    runs = []
+    for _ in range(2):
+        seen = []
+        sh.differential_evolution_search(lambda xs: seen.extend(map(tuple, xs)) or bowl(xs), [0.1, 0.1],
+                                         [-1, -1], [1, 1], maxiter=3, seed=7)
+        runs.append(seen)
+    assert runs[0] == runs[1]
+    np.testing.assert_allclose(runs[0][0], (0.1, 0.1), rtol=1e-14)  # scipy scales x0 to [0, 1] and back
+    assert len(runs[0]) == 5 * 4  # max(5, popsize * n) members, initial population + 3 generations
+
+
+# --- the params JSON and its replay -----------------------------------------------------------------
+
+
+def test_replaying_the_json_reproduces_the_recorded_cost_exactly(params_file, tmp_path, capsys):
+    """The simulator is deterministic and JSON floats round-trip: the replayed cost is bit-identical,
+    through the library (replay) and through `cobra-ref simulate --params` (cmd_simulate_params)."""
+    record = json.loads(params_file.read_text())
+    traj, cost = sh.replay(str(params_file))
+    assert cost["cost"] == record["cost"]
+    assert cost["box_distance_to_goal"] == record["box_distance_to_goal"]
+    args = argparse.Namespace(params=str(params_file), duration=None, out=str(tmp_path / "r.npz"), quiet=True)
+    assert cmd_simulate_params(args) == 0
+    line = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert line["cost_matches"] is True and line["params_cost"] == record["cost"]
+    assert (tmp_path / "r.npz").exists()
+    run = params_reference(str(params_file))
+    assert run.duration == record["settings"]["duration"] and run.recorded_cost == record["cost"]
+
+
+def test_params_json_holds_every_setting(params_file, problem):
+    record = json.loads(params_file.read_text())
+    s = record["settings"]
+    for key in ("gait", "goal", "duration", "dt", "weights", "decision", "box_pose0", "middle_pose0",
+                "fixed", "cobra_parameters", "step_settings"):
+        assert key in s, key
+    assert record["optimizer"]["seed"] == 0 and record["code"]["version"]
+    assert sh.problem_from_dict(s) == problem
+    assert len(record["history"]) == 2 and {"cost", "box_distance_to_goal", "params"} <= set(record["history"][0])
+
+
+@pytest.mark.parametrize("text, message", [
+    ("{not json", "not a readable JSON"),
+    ('{"format": "something else"}', "not a params file"),
+    ('{"format": "cobra-ref optimize v1", "params": {}}', "missing"),
+])
+def test_malformed_params_json_is_a_clear_error(tmp_path, text, message):
+    path = tmp_path / "bad.json"
+    path.write_text(text)
+    with pytest.raises(sh.ShootingError, match=message):
+        params_reference(str(path))
+
+
+def test_params_json_with_broken_settings_is_a_clear_error(params_file, tmp_path):
+    record = json.loads(params_file.read_text())
+    record["settings"]["goal"] = ["a", 1]
+    path = tmp_path / "broken.json"
+    path.write_text(json.dumps(record))
+    with pytest.raises(sh.ShootingError, match="malformed settings"):
+        params_reference(str(path))
+    with pytest.raises(sh.ShootingError, match="not found"):
+        params_reference(str(tmp_path / "missing.json"))
+
+
+# --- bad input -------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("goal, message", [
+    (("a", "b"), "two numbers"),
+    ((0.1,), "two finite numbers"),
+    ((np.nan, 0.0), "two finite numbers"),
+    ((10.0, 0.0), "unreachable"),
+    ((0.3, 0.0), "unreachable"),  # 0.3 m in 0.3 s: more than 0.5 m/s
+    ((0.0, 0.0), "where the box starts"),
+])
+def test_bad_goals_are_clear_errors(goal, message):
+    with pytest.raises(sh.ShootingError, match=message):
+        tiny_problem(goal=goal)
+
+
+def test_bounds_that_exclude_the_initial_guess_are_a_clear_error():
+    with pytest.raises(sh.ShootingError, match="exclude the initial guess: frequency = 0.5"):
+        tiny_problem(bounds={"frequency": (0.6, 1.0)})
+    with pytest.raises(sh.ShootingError, match="lo < hi"):
+        tiny_problem(bounds={"frequency": (1.0, 0.6)})
+    with pytest.raises(sh.ShootingError, match="amplitude"):  # beyond q_max = pi/2: the gait rejects it
+        tiny_problem(decision=("amplitude",), bounds={"amplitude": (0.3, 2.0)})
+    with pytest.raises(sh.ShootingError, match="unknown gait"):
+        sh.make_problem("walking", GOAL)
+
+
+def test_optimize_cli_rejects_bad_input_before_any_rollout(tmp_path, capsys):
+    out = str(tmp_path / "p.json")
+    with pytest.raises(SystemExit) as exc:
+        run_cli(["optimize", "--gait", "C", "--goal", "a,b", "--out", out])
+    assert exc.value.code == 2 and "not a number" in capsys.readouterr().err
+    with pytest.raises(SystemExit, match="unreachable"):
+        run_cli(["optimize", "--gait", "C", "--goal", "9,0", "--out", out])
+    with pytest.raises(SystemExit, match="exclude the initial guess"):
+        run_cli(["optimize", "--gait", "C", "--goal", "0.1,0", "--bound", "frequency=0.7,0.9", "--out", out])
+    with pytest.raises(SystemExit, match="NAME=LO,HI"):
+        run_cli(["optimize", "--gait", "C", "--goal", "0.1,0", "--bound", "frequency=0.7", "--out", out])
+    assert not (tmp_path / "p.json").exists()
+
+
+def test_optimize_cli_writes_the_json_and_one_json_line(tmp_path, capsys, monkeypatch):
+    """`cobra-ref optimize ... --maxiter 0` (the initial guess only), and Ctrl-C in the next run:
+    the file is written with "interrupted": true and the exit status is 130."""
+    out = tmp_path / "p.json"
+    argv = ["optimize", "--gait", "C", "--goal", "0.05,-0.01", "--duration", "0.3", "--ramp-time", "0.1",
+            "--box-gap", "0.005", "--workers", "1", "--out", str(out)]
+    assert run_cli(argv + ["--maxiter", "0"]) == 0
+    captured = capsys.readouterr()
+    line = json.loads(captured.out.strip().splitlines()[-1])
+    assert len(captured.out.strip().splitlines()) == 1 and line["rollouts"] == 1
+    assert "iteration  0/0" in captured.err and "wrote" in captured.err
+    record = json.loads(out.read_text())
+    assert record["interrupted"] is False and record["cost"] == line["cost"]
+
+    class Interrupt(sh.SerialExecutor):
+        def submit(self, fn, /, *args, **kwargs):
+            if getattr(self, "done", False):
+                raise KeyboardInterrupt
+            self.done = True
+            return super().submit(fn, *args, **kwargs)
+
+    monkeypatch.setattr("cobra_ref.cli_optimize.SerialExecutor", Interrupt)
+    assert run_cli(argv + ["--maxiter", "2"]) == 130
+    assert json.loads(out.read_text())["interrupted"] is True
+    assert "INTERRUPTED" in capsys.readouterr().err
+
+
+def test_problem_is_picklable_and_rebuilt_from_json(problem):
+    import pickle
+
+    assert pickle.loads(pickle.dumps(problem)) == problem
+    assert sh.problem_from_dict(json.loads(json.dumps(sh.problem_to_dict(problem)))) == problem
+    assert dataclasses.replace(problem, goal=(0.0, 0.1)).goal_world[1] == pytest.approx(problem.box_pose0[1] + 0.1)
