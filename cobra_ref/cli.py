@@ -181,7 +181,7 @@ def cmd_bench(args) -> int:
 def cmd_figures(args) -> int:
     """Regenerate figures 3-9, the GIFs and the claims report (``regenerate`` module)."""
     from .reproduce import PAPER_GAITS
-    from .regenerate import check_output_dir, regenerate
+    from .regenerate import OPTIMIZED_DIR, check_output_dir, regenerate
 
     gaits = PAPER_GAITS if args.gaits is None else tuple(g.strip() for g in args.gaits.split(","))
     unknown = [g for g in gaits if g not in PAPER_GAITS]
@@ -193,7 +193,9 @@ def cmd_figures(args) -> int:
         raise SystemExit(f"error: {exc}")
     with c_stdout_silenced():
         result = regenerate(args.out, quick=args.quick, force=args.force, cache_dir=args.cache,
-                            workers=args.jobs, mujoco=not args.no_mujoco, progress=not args.quiet, gaits=gaits)
+                            workers=args.jobs, mujoco=not args.no_mujoco, progress=not args.quiet, gaits=gaits,
+                            optimized_dir=None if args.defaults else OPTIMIZED_DIR,
+                            reoptimize_all=args.reoptimize)
     print(json.dumps({"out": args.out, "files": len(result["files"]),
                       "claims": {c["id"]: c["holds"] for c in result["claims"]},
                       "seconds": round(result["seconds"], 1)}))
@@ -257,7 +259,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("figures", help="regenerate the paper's figures 3-9, GIFs and the claims report",
-                       description="Simulate the five gaits (10 s each; 1 s with --quick) on all cores, or read "
+                       description="Simulate the five gaits (10 s each; 1 s with --quick; with the optimized "
+                                   "parameters of cobra_ref/optimized/ where present) on all cores, or read "
                                    "them from the cache, and write fig03_snapshots.png ... fig09_box_distance.png "
                                    "(+ PDF), anim_<gait>.gif, claims.json, claims.md and summary.json to --out. "
                                    "Prints a one-line JSON summary.")
@@ -268,6 +271,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: the number of cores)")
     p.add_argument("--gaits", default=None, help="comma-separated subset of C,S,J,J-mirror,sidewinding")
     p.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo rollout cross-check")
+    p.add_argument("--defaults", action="store_true",
+                   help="simulate every gait with its default parameters (notes C10) instead of the optimized "
+                        "ones committed in cobra_ref/optimized/")
+    p.add_argument("--reoptimize", action="store_true",
+                   help="first re-run 'cobra-ref optimize' for every gait and the three direction goals, into "
+                        "OUT/optimized/, and use those (about 20 min)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_figures)
 

@@ -5,11 +5,17 @@ Helper: the orchestration; the physics is in ``reproduce`` (simulations), ``anal
 
 Steps:
 
+0. with ``reoptimize_all``, re-run the single-shooting optimizer for every gait and for the
+   direction goals (``DIRECTIONS``) into ``OUT/optimized/``;
 1. simulate the five gaits (C, S, J, J-mirror, sidewinding; 10 s each, 1 s with ``quick``) on
-   both cores, or read them from the cache (``reproduce``: keyed by a hash of every input);
+   both cores, or read them from the cache (``reproduce``: keyed by a hash of every input). A gait
+   with a params JSON in the optimized directory (``cobra_ref/optimized/<gait>.json`` by
+   default, committed) runs with its optimized parameters, the others with their defaults;
 2. write each figure; a figure whose inputs (the simulations' cache keys and the figure
    module's source) are unchanged since it was last written is kept (``.stamps.json`` in the
    output directory), unless ``force``;
+   ``fig_optimization`` and ``fig_directions`` come from the params JSONs (each optimum
+   replayed once, its box path cached);
 3. write ``claims.json`` (a list of {id, claim, values, holds}) and ``claims.md``, and
    ``summary.json`` with every gait's numbers.
 
@@ -26,7 +32,9 @@ import os
 import sys
 import time
 
-from .atomic import write_text
+import numpy as np
+
+from .atomic import atomic_write, write_text
 from .reproduce import PAPER_GAITS, RunSpec, run_all
 
 FULL_DURATION, QUICK_DURATION = 10.0, 1.0
@@ -55,9 +63,58 @@ def specs_for(gaits=PAPER_GAITS, quick: bool = False, dt: float = 1e-3, params: 
     return [RunSpec(g, duration=duration, dt=dt, params=dict(params.get(g, {}))) for g in gaits]
 
 
+OPTIMIZED_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "optimized")
+# the direction-control optimizations (issue 5): goal (dx, dy) relative to the box's start, and the gait
+DIRECTIONS = {"ahead": ("J", (0.3, 0.0)), "left": ("J-mirror", (0.25, 0.15)), "right": ("C", (0.2, -0.15))}
+
+
+def optimized_files(directory: str = OPTIMIZED_DIR, gaits=PAPER_GAITS) -> dict:
+    """{gait: path} of the params JSONs of ``cobra-ref optimize`` present in ``directory``.
+
+    Helper: the figure command simulates each gait with its optimized parameters when a file
+    exists (``cobra_ref/optimized/<gait>.json``, committed), with the defaults otherwise.
+    """
+    paths = {g: os.path.join(directory, f"{g}.json") for g in gaits}
+    return {g: p for g, p in paths.items() if os.path.isfile(p)}
+
+
+def optimized_params(files: dict) -> dict:
+    """{gait: gait parameters} from the params JSONs ``files`` ({gait: path}).
+
+    Helper: the ``params`` of each optimum (phase-rate ramp included), for ``specs_for``.
+    """
+    from .shooting import load_result
+
+    return {g: dict(load_result(p)["params"]) for g, p in files.items()}
+
+
+def reoptimize(directory: str, gaits=PAPER_GAITS, progress: bool = True) -> dict:
+    """Run the optimizer for every gait at its defaults (``shooting.DEFAULTS``) and for the
+    direction goals (``DIRECTIONS``), writing the params JSONs into ``directory``; return
+    {name: path}.
+
+    Helper: ``cobra-ref figures --reoptimize``.
+    """
+    from .shooting import optimize_gait
+
+    os.makedirs(directory, exist_ok=True)
+    say = (lambda line: _say(True, "    " + line)) if progress else (lambda line: None)
+    files = {}
+    for g in gaits:
+        _say(progress, f"  optimizing {g}")
+        files[g] = os.path.join(directory, f"{g}.json")
+        optimize_gait(g, out=files[g], progress=say)
+    for name, (g, goal) in DIRECTIONS.items():
+        _say(progress, f"  optimizing direction '{name}' with {g}, goal {goal}")
+        files[f"direction-{name}"] = os.path.join(directory, f"direction-{name}.json")
+        optimize_gait(g, goal=goal, out=files[f"direction-{name}"], progress=say)
+    return files
+
+
 def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = False, cache_dir: str | None = None,
                workers: int | None = None, mujoco: bool = True, progress: bool = True, gaits=PAPER_GAITS,
-               params: dict | None = None) -> dict:
+               params: dict | None = None, optimized_dir: str | None = OPTIMIZED_DIR,
+               reoptimize_all: bool = False) -> dict:
     """Run steps 1-3 of the module docstring; return {"files": [...], "claims": [...], "seconds": ...}.
 
     Helper: the body of ``cobra-ref figures``.
@@ -69,6 +126,14 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
     start = time.perf_counter()
     check_output_dir(out_dir)
     cache_dir = cache_dir or os.path.join(out_dir, ".cache")
+    if reoptimize_all:
+        optimized_dir = os.path.join(out_dir, "optimized")
+        reoptimize(optimized_dir, gaits, progress)
+    files_opt = optimized_files(optimized_dir, gaits) if optimized_dir else {}
+    if params is None:
+        params = optimized_params(files_opt)
+        _say(progress, f"optimized parameters for {', '.join(params) or 'no gait'} (from {optimized_dir}); "
+                       f"defaults for the others")
     specs = specs_for(gaits, quick, params=params)
     _say(progress, f"simulating {len(specs)} gaits x {specs[0].duration:g} s (cache: {cache_dir})")
     results = run_all(specs, cache_dir, force=force, workers=workers, progress=progress)
@@ -91,9 +156,13 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
         write_text(stamps_path, json.dumps(stamps, indent=1))
         files += written
         _say(progress, f"  {name}: {len(written)} file(s), {time.perf_counter() - t0:.1f} s")
+    if optimized_dir and os.path.isdir(optimized_dir):
+        files += _optimization_figures(optimized_dir, gaits, out_dir, cache_dir, progress)
     summaries = claims_mod.gait_summaries(results)
     report = claims_mod.paper_claims(summaries)
     settings = {"duration (s)": specs[0].duration, "dt (s)": specs[0].dt, "quick": quick,
+                "optimized parameters from": {g: files_opt.get(g, "defaults (notes C10)") for g in gaits}
+                if params else "defaults (notes C10)",
                 "gait parameters": {g: r.meta.get("gait_params") for g, r in results.items()},
                 "box direction (sidewinding)": results["sidewinding"].meta.get("box_direction")
                 if "sidewinding" in results else None}
@@ -131,6 +200,63 @@ def _mujoco_rows(results, out_dir, progress, files) -> list[dict]:
     files += make_figure(rows, out_dir)
     _say(progress, f"  MuJoCo cross-check: {len(rows)} gaits, {time.perf_counter() - t0:.1f} s")
     return claims_mod.mujoco_claims(rows)
+
+
+def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, progress: bool) -> list[str]:
+    """``fig_optimization`` (one optimum per gait) and ``fig_directions`` (``DIRECTIONS``) from the
+    params JSONs in ``directory``; each optimum is replayed once and its box path cached."""
+    from .figures.fig_optimization import make
+    from .shooting import load_result
+
+    def runs(names):
+        out = []
+        for label, gait, path in names:
+            if os.path.isfile(path):
+                out.append({"label": label, "gait": gait, "record": load_result(path),
+                            "box_xy": _replayed_box_path(path, cache_dir)})
+        return out
+
+    t0 = time.perf_counter()
+    # replay the optima not yet cached, in parallel (each is an independent simulation)
+    paths = [os.path.join(directory, f"{g}.json") for g in gaits]
+    paths += [os.path.join(directory, f"direction-{name}.json") for name in DIRECTIONS]
+    paths = [p for p in paths if os.path.isfile(p)]
+    if len(paths) > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        from .parallel import worker_init
+
+        with ProcessPoolExecutor(min(len(paths), os.cpu_count() or 1), initializer=worker_init) as pool:
+            list(pool.map(_replayed_box_path, paths, [cache_dir] * len(paths)))
+    per_gait = runs([(g, g, os.path.join(directory, f"{g}.json")) for g in gaits])
+    directions = runs([(f"{name}: {g}", g, os.path.join(directory, f"direction-{name}.json"))
+                       for name, (g, _) in DIRECTIONS.items()])
+    files = []
+    if per_gait:
+        files += make(per_gait, out_dir, "fig_optimization", "Single shooting per gait (cobra-ref optimize)")
+    if directions:
+        files += make(directions, out_dir, "fig_directions", "Direction control: choose the gait for the goal")
+    _say(progress, f"  optimization figures: {len(per_gait)} gaits, {len(directions)} directions, "
+                   f"{time.perf_counter() - t0:.1f} s")
+    return files
+
+
+def _replayed_box_path(path: str, cache_dir: str) -> np.ndarray:
+    """(n, 2) box path of the optimum of the params JSON ``path``, replayed once and cached under a
+    hash of the JSON and the physics source."""
+    from .reproduce import physics_hash
+    from .shooting import replay
+
+    with open(path, "rb") as f:
+        key = hashlib.sha256(f.read() + physics_hash(("shooting",)).encode()).hexdigest()[:16]
+    cached = os.path.join(cache_dir, f"optimum-{key}.npy")
+    if os.path.isfile(cached):
+        return np.load(cached)
+    traj, _ = replay(path)
+    xy = traj.box_pose[:, :2].copy()
+    os.makedirs(cache_dir, exist_ok=True)
+    atomic_write(cached, lambda tmp: np.save(tmp, xy))
+    return xy
 
 
 def _stamp(keys: dict, module) -> str:

@@ -66,19 +66,28 @@ class RunSpec:
 
     def key(self) -> str:
         """SHA-256 of every input of the run (module docstring)."""
-        here = os.path.dirname(os.path.abspath(__file__))
         h = hashlib.sha256()
         record = {"spec": asdict(self), "gait": gait_params(self.reference()),
                   "cobra": asdict(self.cobra_parameters()), "settings": asdict(StepSettings(dt=self.dt)),
                   "version": __version__}
         h.update(json.dumps(record, sort_keys=True, default=str).encode())
-        for name in PHYSICS_MODULES:
-            with open(os.path.join(here, name + ".py"), "rb") as f:
-                h.update(f.read())
+        h.update(physics_hash().encode())
         return h.hexdigest()
 
     def filename(self) -> str:
         return f"{self.gait}-{self.key()[:16]}.npz"
+
+
+def physics_hash(extra=()) -> str:
+    """SHA-256 of the source of every module a simulation runs (``PHYSICS_MODULES`` + ``extra``).
+
+    Helper: the code-version part of the cache keys and of the optimizer's params JSON.
+    """
+    here, h = os.path.dirname(os.path.abspath(__file__)), hashlib.sha256()
+    for name in PHYSICS_MODULES + tuple(extra):
+        with open(os.path.join(here, name + ".py"), "rb") as f:
+            h.update(f.read())
+    return h.hexdigest()
 
 
 def travel_direction(spec: RunSpec, periods: float = 2.0) -> np.ndarray:

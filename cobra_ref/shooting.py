@@ -678,16 +678,10 @@ def code_version() -> dict:
 
     Helper: recorded in the params JSON, checked on replay.
     """
-    import hashlib
-
     from . import __version__
-    from .reproduce import PHYSICS_MODULES
+    from .reproduce import physics_hash
 
-    here, h = os.path.dirname(os.path.abspath(__file__)), hashlib.sha256()
-    for name in PHYSICS_MODULES + ("shooting",):
-        with open(os.path.join(here, name + ".py"), "rb") as f:
-            h.update(f.read())
-    return {"version": __version__, "physics_sha256": h.hexdigest()}
+    return {"version": __version__, "physics_sha256": physics_hash(("shooting",))}
 
 
 def result_to_dict(result: ShootingResult) -> dict:

@@ -16,10 +16,11 @@ from cobra_ref.simulate import Trajectory
 
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
-    """One quick regeneration (5 gaits x 1 s on both cores, figures, claims; no MuJoCo here:
-    tests/test_mujoco_rollout.py covers it)."""
+    """One quick regeneration (5 gaits x 1 s at their default parameters on both cores, figures,
+    claims; no MuJoCo here: tests/test_mujoco_rollout.py covers it, and the optimization figure is
+    tested in tests/test_shooting.py)."""
     out = str(tmp_path_factory.mktemp("figures"))
-    assert main(["figures", "--quick", "--no-mujoco", "--quiet", "--out", out]) == 0
+    assert main(["figures", "--quick", "--no-mujoco", "--defaults", "--quiet", "--out", out]) == 0
     return out
 
 
@@ -66,7 +67,7 @@ def test_work_on_the_box_recomputed_by_hand_from_the_npz(quick_run):
 
 def test_a_warm_run_reuses_the_simulations_and_the_figures(quick_run):
     before = {p: os.path.getmtime(p) for p in glob.glob(os.path.join(quick_run, "fig0*.png"))}
-    assert main(["figures", "--quick", "--no-mujoco", "--quiet", "--out", quick_run]) == 0
+    assert main(["figures", "--quick", "--no-mujoco", "--defaults", "--quiet", "--out", quick_run]) == 0
     after = {p: os.path.getmtime(p) for p in before}
     assert after == before, "unchanged inputs must keep the figures"
 

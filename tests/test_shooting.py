@@ -10,6 +10,7 @@ ten of them.
 import argparse
 import dataclasses
 import json
+import os
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
@@ -284,3 +285,31 @@ def test_problem_is_picklable_and_rebuilt_from_json(problem):
     assert pickle.loads(pickle.dumps(problem)) == problem
     assert sh.problem_from_dict(json.loads(json.dumps(sh.problem_to_dict(problem)))) == problem
     assert dataclasses.replace(problem, goal=(0.0, 0.1)).goal_world[1] == pytest.approx(problem.box_pose0[1] + 0.1)
+
+
+# --- the optimization figure of `cobra-ref figures` --------------------------------------------------
+
+def test_optimization_figure_replays_each_optimum_once(params_file, tmp_path, monkeypatch):
+    """fig_optimization comes from the params JSONs; the optimum's box path is replayed once,
+    then read from the cache (a second call must not simulate: replay is made to fail)."""
+    import shutil
+
+    from cobra_ref import regenerate
+
+    directory, out, cache = tmp_path / "optimized", tmp_path / "out", tmp_path / "cache"
+    directory.mkdir()
+    out.mkdir()
+    shutil.copy(params_file, directory / "C.json")
+    files = regenerate._optimization_figures(str(directory), ["C"], str(out), str(cache), False)
+    assert sorted(os.path.basename(f) for f in files) == ["fig_optimization.pdf", "fig_optimization.png"]
+    with open(out / "fig_optimization.png", "rb") as f:
+        assert f.read(4) == b"\x89PNG"
+    path = regenerate._replayed_box_path(str(directory / "C.json"), str(cache))
+    replayed, _ = sh.replay(str(params_file))
+    assert np.array_equal(path, replayed.box_pose[:, :2])
+
+    def no_simulation(*args, **kw):
+        raise AssertionError("replayed again although the cache holds the path")
+
+    monkeypatch.setattr(sh, "replay", no_simulation)
+    regenerate._optimization_figures(str(directory), ["C"], str(out), str(cache), False)

@@ -134,6 +134,27 @@ def minmax_decimate(t: np.ndarray, y: np.ndarray, max_points: int = 4000) -> tup
     return t[keep], y[keep]
 
 
+FORCE_WINDOW = 0.02  # [s] contact forces are drawn as means over windows of this length
+
+
+def window_mean(t: np.ndarray, y: np.ndarray, window: float = FORCE_WINDOW) -> tuple[np.ndarray, np.ndarray]:
+    """Means of ``y`` over consecutive windows of ``window`` seconds, at the windows' centres.
+
+    Helper: a rigid contact solver redistributes the force among redundant contacts from one
+    1 ms step to the next; the mean force over a window (its impulse / window) is the physically
+    meaningful, readable quantity. Samples of a final, shorter window are averaged on their own.
+    """
+    if len(t) < 2:
+        return t, y
+    per = max(1, int(round(window / (t[1] - t[0]))))
+    n = len(t)
+    starts = np.arange(0, n, per)
+    sums = np.add.reduceat(y, starts, axis=0)
+    counts = np.diff(np.append(starts, n))
+    centres = np.add.reduceat(t, starts) / counts
+    return centres, sums / (counts if y.ndim == 1 else counts[:, None])
+
+
 def robust_ylim(ax, values: np.ndarray, unit: str = "N", quantile: float = 0.99) -> None:
     """Cap the y axis at 1.2 x the ``quantile`` of |values| when a few spikes (e.g. the landing
     impact in the first steps) would otherwise flatten everything else; the clipped maximum is

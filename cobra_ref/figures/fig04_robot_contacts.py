@@ -55,18 +55,20 @@ def plot_timeline(ax, t: np.ndarray, in_contact: np.ndarray, names: list[str]) -
 
 
 def plot_per_link(ax, t: np.ndarray, force: np.ndarray, colors: list) -> None:
-    """One line per body of a (N, n_bodies) force array [N]; "no contact" when it is all zero.
+    """One line per body of a (N, n_bodies) force array [N], as means over ``common.FORCE_WINDOW``
+    (20 ms); "no contact" when it is all zero.
 
     Helper: the f_N and f_T panels.
     """
     if len(t) == 0 or not np.any(force):
         common.empty_panel(ax)
         return
+    t_mean, f_mean = common.window_mean(t, force)
     for j, color in enumerate(colors):
         if np.any(force[:, j]):
-            ax.plot(*common.minmax_decimate(t, force[:, j]), color=color, lw=0.6)
+            ax.plot(t_mean, f_mean[:, j], color=color, lw=0.7)
     ax.set_ylim(bottom=0.0)
-    common.robust_ylim(ax, force[force > 0])
+    common.robust_ylim(ax, f_mean[f_mean > 0])
 
 
 @common.paper_style
@@ -94,8 +96,8 @@ def make(results: dict, out_dir: str, model) -> list[str]:
         axes[r, 1].set_ylabel(r"$f_{N,i}$ [N]")
         axes[r, 2].set_ylabel(r"$\|f_{T,i}\|$ [N]")
     axes[0, 0].set_title("ground contact (dark = touching)")
-    axes[0, 1].set_title("normal force per body")
-    axes[0, 2].set_title("tangential force per body")
+    axes[0, 1].set_title("normal force per body (20 ms means)")
+    axes[0, 2].set_title("tangential force per body (20 ms means)")
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
     _link_colorbar(fig, axes[:, 1:], names)

@@ -23,15 +23,18 @@ from . import common
 
 
 def plot_normal_tangential(ax, t: np.ndarray, f_N: np.ndarray, f_T: np.ndarray, color: str) -> bool:
-    """f_N solid and |f_T| dashed over time [N]; "no contact" and False when both are zero.
+    """f_N solid and |f_T| dashed over time [N], as means over ``common.FORCE_WINDOW`` (20 ms);
+    "no contact" and False when both are zero.
 
     Helper: one force panel of fig. 5.
     """
     if len(t) == 0 or not (np.any(f_N) or np.any(f_T)):
         common.empty_panel(ax)
         return False
-    ax.plot(*common.minmax_decimate(t, f_N), color=color)
-    ax.plot(*common.minmax_decimate(t, f_T), color=color, ls="--", lw=0.8)
+    t_mean, f_N = common.window_mean(t, f_N)
+    f_T = common.window_mean(t, f_T)[1]
+    ax.plot(t_mean, f_N, color=color)
+    ax.plot(t_mean, f_T, color=color, ls="--", lw=0.8)
     ax.set_ylim(bottom=0.0)
     common.robust_ylim(ax, np.concatenate([f_N, f_T]))
     return True
@@ -81,8 +84,8 @@ def make(results: dict, out_dir: str, model) -> list[str]:
         plot_box_ground(axes[r, 1], model, traj, t, color)
         for ax in axes[r]:
             ax.set_ylabel(f"{common.gait_label(gait, traj)}\nforce [N]", color=color)
-    axes[0, 0].set_title("robot-box contact (sum over links)")
-    axes[0, 1].set_title("box-ground contact (sum over corners)")
+    axes[0, 0].set_title("robot-box contact (sum over links, 20 ms means)")
+    axes[0, 1].set_title("box-ground contact (sum over corners, 20 ms means)")
     _legend(fig)
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")

@@ -1,0 +1,60 @@
+"""The single-shooting optimizations as pictures: cost histories and the box's path to each goal.
+
+Helper: the figures of issue 5 (DESIGN.md sec. 5). ``make`` draws, for a set of optimized runs
+(one params JSON of ``cobra-ref optimize`` each, replayed to get the box's path):
+
+* left: the cost of every rollout in evaluation order (dots) and the best so far (line), per run;
+* right: top view of the box's path over the horizon under the optimum (line), from its start
+  (cross) to where it ended (dot), with the goal (star) and the initial guess's final box position
+  (ring) for comparison.
+
+It is used twice: ``fig_optimization`` (one optimum per gait) and ``fig_directions`` (the box
+pushed ahead, to the left and to the right by choosing the gait, the mirrored J included).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import common
+
+
+def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
+    """Write ``stem.png`` / ``.pdf``; ``runs``: dicts with ``label``, ``gait``, ``record`` (the
+    params JSON as read by ``shooting.load_result``) and ``box_xy`` ((n, 2) box path of the replay).
+
+    Helper: the optimization figures (module docstring).
+    """
+    fig = common.new_figure(common.TWO_COLUMN, 3.0)
+    ax_cost, ax_path = fig.subplots(1, 2)
+    if not runs:
+        common.empty_panel(ax_cost, "no optimization results")
+        common.empty_panel(ax_path, "no optimization results")
+    for run in runs:
+        color = common.gait_color(run["gait"])
+        history = run["record"]["history"]
+        cost = np.array([h["cost"] for h in history], dtype=float)
+        ax_cost.plot(np.arange(1, len(cost) + 1), cost, ".", color=color, ms=3)
+        ax_cost.plot(np.arange(1, len(cost) + 1), np.minimum.accumulate(cost), "-", color=color,
+                     label=run["label"])
+        xy = np.asarray(run["box_xy"])
+        goal = run["record"]["settings"]["goal_world"]
+        ax_path.plot(xy[:, 0], xy[:, 1], "-", color=color, label=run["label"])
+        ax_path.plot(xy[0, 0], xy[0, 1], "+", color=color, ms=8)
+        ax_path.plot(xy[-1, 0], xy[-1, 1], "o", color=color, ms=4)
+        ax_path.plot(goal[0], goal[1], "*", color=color, ms=9, mec="k", mew=0.5)
+        first = history[0].get("box_final")
+        if first is not None:
+            ax_path.plot(first[0], first[1], "o", mfc="none", color=color, ms=6)
+    ax_cost.set_yscale("log")
+    ax_cost.set_xlabel("rollout")
+    ax_cost.set_ylabel("cost J (dimensionless)")
+    ax_cost.set_title("cost of each rollout; line: best so far")
+    ax_path.set_xlabel("box x [m]")
+    ax_path.set_ylabel("box y [m]")
+    ax_path.set_aspect("equal", adjustable="datalim")
+    ax_path.set_title("box path under the optimum (+ start, * goal,\no end, ring: initial guess's end)")
+    if runs:
+        ax_cost.legend(fontsize=6)
+    fig.suptitle(title)
+    return common.save(fig, out_dir, stem)
