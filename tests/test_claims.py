@@ -82,6 +82,9 @@ def test_claim_verdicts_follow_the_numbers():
         s["sidewinding"][key] = 2 * base[key]
     s["J"]["box_displacement"], s["J-mirror"]["box_displacement"] = [0.1, -0.02], [0.1, 0.02]
     assert all(c["holds"] for c in paper_claims(s))
+    s["J"]["efficiency_slope"] = 12.0  # J now less efficient than C and sidewinding (10), S still better
+    assert {c["id"]: c["holds"] for c in paper_claims(s)}["E"] is False, "both S and J must beat both"
+    s["J"]["efficiency_slope"] = 5.0
     s["C"]["efficiency_slope"] = 4.0  # C now beats S and J
     s["J-mirror"]["box_displacement"] = [0.1, -0.01]  # same side as J
     verdicts = {c["id"]: c["holds"] for c in paper_claims(s)}
