@@ -4,9 +4,9 @@ Helper: the figures of issue 5 (DESIGN.md sec. 5). ``make`` draws, for a set of 
 (one params JSON of ``cobra-ref optimize`` each, replayed to get the box's path):
 
 * left: the cost of every rollout in evaluation order (dots) and the best so far (line), per run;
-* right: top view of the box's path over the horizon under the optimum (line), from its start
-  (cross) to where it ended (dot), with the goal (star) and the initial guess's final box position
-  (ring) for comparison.
+* right: top view of the box's path over the horizon under the optimum (line), relative to its
+  start (cross), to where it ended (dot), with the goal (star) and the initial guess's final box
+  position (ring) for comparison; rollouts whose simulation failed are counted on the left.
 
 It is used twice: ``fig_optimization`` (one optimum per gait) and ``fig_directions`` (the box
 pushed ahead, to the left and to the right by choosing the gait, the mirrored J included).
@@ -37,23 +37,31 @@ def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
         ax_cost.plot(np.arange(1, len(cost) + 1), cost, ".", color=color, ms=3)
         ax_cost.plot(np.arange(1, len(cost) + 1), np.minimum.accumulate(cost), "-", color=color,
                      label=run["label"])
+        # everything relative to the box's start, so that the directions compare at a glance
         xy = np.asarray(run["box_xy"])
-        goal = run["record"]["settings"]["goal_world"]
+        start = xy[0].copy()
+        xy = xy - start
+        goal = np.asarray(run["record"]["settings"]["goal_world"]) - start
         ax_path.plot(xy[:, 0], xy[:, 1], "-", color=color, label=run["label"])
-        ax_path.plot(xy[0, 0], xy[0, 1], "+", color=color, ms=8)
         ax_path.plot(xy[-1, 0], xy[-1, 1], "o", color=color, ms=4)
         ax_path.plot(goal[0], goal[1], "*", color=color, ms=9, mec="k", mew=0.5)
         first = history[0].get("box_final")
         if first is not None:
-            ax_path.plot(first[0], first[1], "o", mfc="none", color=color, ms=6)
+            ax_path.plot(first[0] - start[0], first[1] - start[1], "o", mfc="none", color=color, ms=6)
+        n_failed = sum(1 for h in history if h.get("error"))
+        if n_failed:
+            ax_cost.annotate(f"{run['label']}: {n_failed} rollout(s) failed (cost {max(cost):g})",
+                             (0.02, 0.97 - 0.07 * runs.index(run)), xycoords="axes fraction", fontsize=5.5,
+                             va="top", color=color)
     ax_cost.set_yscale("log")
     ax_cost.set_xlabel("rollout")
     ax_cost.set_ylabel("cost J (dimensionless)")
     ax_cost.set_title("cost of each rollout; line: best so far")
-    ax_path.set_xlabel("box x [m]")
-    ax_path.set_ylabel("box y [m]")
+    ax_path.plot(0.0, 0.0, "k+", ms=9)
+    ax_path.set_xlabel("box dx from its start [m]")
+    ax_path.set_ylabel("box dy [m]")
     ax_path.set_aspect("equal", adjustable="datalim")
-    ax_path.set_title("box path under the optimum (+ start, * goal,\no end, ring: initial guess's end)")
+    ax_path.set_title("box path of the optimum\n* goal, o end, ring: initial guess")
     if runs:
         ax_cost.legend(fontsize=6)
     fig.suptitle(title)
