@@ -89,6 +89,9 @@ def add_parsers(sub) -> None:
     p.add_argument("--dt", type=_finite_float, default=1e-3, help="time step [s] (default 1e-3)")
     p.add_argument("--ramp-time", type=_finite_float, default=RAMP_TIME,
                    help=f"ramp-in of the gait's phase rate [s] (default {RAMP_TIME})")
+    p.add_argument("--servo", choices=("prescribed", "pd"), default="prescribed",
+                   help="joint servo of the rollouts: prescribed (default; the paper's motion provided, impact "
+                        "torques above tau_max penalised) or pd (torques saturated at tau_max at every step)")
     p.add_argument("--box-gap", type=_finite_float, default=0.05,
                    help="gap between the box and the middle link at the start [m] (default 0.05, assumption C9)")
     p.add_argument("--maxiter", type=_count, default=None,
@@ -130,7 +133,7 @@ def cmd_optimize(args) -> int:
     with c_stdout_silenced():  # OSQP's "Polishing not needed" lines (workers: parallel.worker_init)
         try:
             problem = make_problem(args.gait, goal, duration=duration, dt=args.dt, ramp_time=args.ramp_time,
-                                   box_gap=args.box_gap,
+                                   box_gap=args.box_gap, servo=args.servo,
                                    bounds=_assignments(args.bound, 2, "--bound"),
                                    x0=_assignments(args.start, 1, "--start"))
         except ShootingError as exc:

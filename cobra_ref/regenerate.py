@@ -161,7 +161,8 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
     summaries = claims_mod.gait_summaries(results)
     report = claims_mod.paper_claims(summaries)
     settings = {"duration (s)": specs[0].duration, "dt (s)": specs[0].dt, "quick": quick,
-                "optimized parameters from": {g: files_opt.get(g, "defaults (notes C10)") for g in gaits}
+                "optimized parameters from": {g: _shown(files_opt[g]) if g in files_opt else "defaults (notes C10)"
+                                              for g in gaits}
                 if params else "defaults (notes C10)",
                 "gait parameters": {g: r.meta.get("gait_params") for g, r in results.items()},
                 "box direction (sidewinding)": results["sidewinding"].meta.get("box_direction")
@@ -257,6 +258,13 @@ def _replayed_box_path(path: str, cache_dir: str) -> np.ndarray:
     os.makedirs(cache_dir, exist_ok=True)
     atomic_write(cached, lambda tmp: np.save(tmp, xy))
     return xy
+
+
+def _shown(path: str) -> str:
+    """A params file as the report shows it: ``cobra_ref/optimized/<name>`` for the committed ones."""
+    if os.path.dirname(os.path.abspath(path)) == OPTIMIZED_DIR:
+        return "cobra_ref/optimized/" + os.path.basename(path)
+    return path
 
 
 def _stamp(keys: dict, module) -> str:

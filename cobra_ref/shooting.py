@@ -146,6 +146,7 @@ class ShootingProblem:
     middle_pose0: tuple  # (x, y, heading) of the robot's middle at t = 0
     box_direction: tuple | None  # sidewinding: the direction the box was placed in
     cobra: tuple = field(default=())  # ((name, value), ...) of CobraParameters
+    servo: str = "prescribed"  # the joint servo of every rollout (StepSettings.servo)
 
     @property
     def goal_world(self) -> np.ndarray:
@@ -159,7 +160,7 @@ class ShootingProblem:
         return gait(self.gait, **self.params(x))
 
     def settings(self) -> StepSettings:
-        return StepSettings(dt=self.dt)
+        return StepSettings(dt=self.dt, servo=self.servo)
 
     def cobra_parameters(self) -> CobraParameters:
         return CobraParameters(**{k: tuple(v) if isinstance(v, list) else v for k, v in self.cobra})
@@ -167,7 +168,8 @@ class ShootingProblem:
 
 def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, dt: float = 1e-3, bounds=None,
                  x0=None, decision=None, ramp_time: float = RAMP_TIME, weights: Weights = Weights(),
-                 cobra: CobraParameters | None = None, box_gap: float = 0.05) -> ShootingProblem:
+                 cobra: CobraParameters | None = None, box_gap: float = 0.05,
+                 servo: str = "prescribed") -> ShootingProblem:
     """Check the input and build the problem: bounds, initial guess, the common box placement.
 
     Helper: the input side of the shooting method (module docstring). ``bounds`` = {name: (lo, hi)}
@@ -175,13 +177,18 @@ def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, dt: f
     (default: every bounded one), the other gait parameters stay at the initial guess;
     ``x0`` = {name: value} overrides the initial guess (default: the gait's defaults, with
     phase 0 and ``ramp_time``); ``box_gap`` = the gap between the box and the middle link at the
-    start (``simulate.initial_state``, assumption C9: 5 cm). Raises ``ShootingError`` for an
+    start (``simulate.initial_state``, assumption C9: 5 cm); ``servo`` = "prescribed" (the paper's
+    "motion provided": joints follow the reference exactly, torques recovered, impact spikes above
+    tau_max reported and penalised) or "pd" (torques saturated at tau_max, so the torque limit holds
+    at every step by construction; the joints then lag the reference). Raises ``ShootingError`` for an
     unknown gait, a goal that is not two finite numbers or is unreachable, bounds that are empty
     or exclude the initial guess, or values the gait rejects. Sidewinding runs one box-free simulation
     (``reproduce.travel_direction``) to place the box.
     """
     if gait_name not in DECISION:
         raise ShootingError(f"unknown gait {gait_name!r}; gaits: {', '.join(DECISION)}")
+    if servo not in ("prescribed", "pd"):
+        raise ShootingError(f"servo must be 'prescribed' or 'pd', got {servo!r}")
     if not (np.isfinite(duration) and duration > 0):
         raise ShootingError(f"duration must be positive and finite, got {duration}")
     if not (np.isfinite(dt) and 0 < dt <= duration):
@@ -197,7 +204,7 @@ def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, dt: f
     box_pose0, middle0, direction = _box_placement(gait_name, ref, duration, dt, cobra, box_gap)
     return ShootingProblem(gait_name, goal, float(duration), float(dt), names, lower, upper, x_guess,
                            tuple(sorted(guess.items())), weights, box_pose0, middle0, direction,
-                           tuple(asdict(cobra).items()))
+                           tuple(asdict(cobra).items()), servo)
 
 
 def check_goal(goal, duration: float) -> tuple:
@@ -640,7 +647,8 @@ def problem_to_dict(problem: ShootingProblem) -> dict:
             "fixed": dict(problem.fixed), "weights": asdict(problem.weights),
             "box_pose0": list(problem.box_pose0), "middle_pose0": list(problem.middle_pose0),
             "box_direction": None if problem.box_direction is None else list(problem.box_direction),
-            "cobra_parameters": {k: list(v) if isinstance(v, tuple) else v for k, v in problem.cobra}}
+            "cobra_parameters": {k: list(v) if isinstance(v, tuple) else v for k, v in problem.cobra},
+            "servo": problem.servo}
 
 
 def problem_from_dict(d: dict) -> ShootingProblem:
@@ -656,8 +664,10 @@ def problem_from_dict(d: dict) -> ShootingProblem:
             tuple(sorted((str(k), float(v)) for k, v in d["fixed"].items())), Weights(**d["weights"]),
             _floats(d["box_pose0"], 7), _floats(d["middle_pose0"], 3),
             None if d["box_direction"] is None else _floats(d["box_direction"], 2),
-            tuple((str(k), tuple(v) if isinstance(v, list) else v) for k, v in d["cobra_parameters"].items()))
+            tuple((str(k), tuple(v) if isinstance(v, list) else v) for k, v in d["cobra_parameters"].items()),
+            str(d.get("servo", "prescribed")))
         problem.reference(problem.x0)
+        problem.settings()
         problem.cobra_parameters()
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise ShootingError(f"malformed settings in params JSON: {type(exc).__name__}: {exc}") from None

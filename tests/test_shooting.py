@@ -313,3 +313,21 @@ def test_optimization_figure_replays_each_optimum_once(params_file, tmp_path, mo
 
     monkeypatch.setattr(sh, "replay", no_simulation)
     regenerate._optimization_figures(str(directory), ["C"], str(out), str(cache), False)
+
+
+def test_with_the_pd_servo_the_optimum_respects_the_torque_and_joint_limits_at_every_step():
+    """Eq. (6) constraints (2) and (3) held exactly: with ``servo="pd"`` the torques are saturated at
+    tau_max, so no step of any rollout exceeds it (tau_excess <= 0), and the joints stay inside
+    q_max; the optimizer still lowers the cost. (With the default prescribed servo an impact step
+    exceeds tau_max; see the test above, which checks that the penalty counts exactly those.)"""
+    problem = tiny_problem(servo="pd")
+    assert problem.settings().servo == "pd"
+    result = sh.optimize(problem, maxiter=1, step=0.5, executor=sh.SerialExecutor())
+    assert result.best["cost"] <= result.history[0]["cost"]
+    traj = sh.rollout(problem, [result.best["params"]["frequency"]])
+    assert np.all(traj.steps["tau_excess"] <= 1e-12), traj.steps["tau_excess"].max()
+    assert np.all(traj.steps["q_excess"] <= 0.0), traj.steps["q_excess"].max()
+    assert result.best["terms"]["tau_limit"] == 0.0 and result.best["terms"]["q_limit"] == 0.0
+    assert sh.problem_from_dict(sh.problem_to_dict(problem)).servo == "pd"
+    with pytest.raises(sh.ShootingError, match="servo must be"):
+        tiny_problem(servo="stiff")
