@@ -71,3 +71,57 @@ def test_a_failure_mid_run_names_step_and_time_and_keeps_what_was_computed():
     traj = err.value.trajectory
     assert len(traj.tau) == 20 and len(traj.t) == 21 and "step 20" in traj.error
     assert np.all(np.isfinite(traj.q)) and traj.t[-1] == pytest.approx(0.020)
+
+
+def _com_plane_normal(model, q):
+    """Unit normal of the least-squares plane through the robot bodies' centres of mass."""
+    from cobra_ref.kinematics import forward_kinematics
+
+    kin = forward_kinematics(model, q)
+    robot = [i for i in range(model.nb) if i != model.boxes[0].body]
+    com = np.array([kin.p[i] + kin.R[i] @ model.com[i] for i in robot])
+    return np.linalg.svd(com - com.mean(axis=0))[2][-1]
+
+
+def test_a_3d_start_shape_is_laid_on_its_flattest_side():
+    """Sidewinding's t = 0 shape is not planar; initial_state turns the base so that the best-fit
+    plane of the bodies' centres of mass is horizontal (normal = +-z), and the lowest sphere sits
+    1 mm above the ground. A planar rolling shape is not turned at all (identity quaternion)."""
+    from cobra_ref.gaits import gait
+
+    model = cobra_model()
+    q, _ = initial_state(model, gait("sidewinding"))
+    assert abs(_com_plane_normal(model, q)[2]) == pytest.approx(1.0, abs=1e-12)
+    assert not np.allclose(q[3:7], [1, 0, 0, 0]), "sidewinding's start must be turned"
+    q_c, _ = initial_state(model, gait("C"))
+    np.testing.assert_array_equal(q_c[3:7], [1.0, 0.0, 0.0, 0.0])
+    from cobra_ref.kinematics import forward_kinematics
+
+    kin, sph = forward_kinematics(model, q), model.spheres
+    robot = sph.body != model.boxes[0].body
+    bottoms = [kin.p[b][2] + (kin.R[b] @ c)[2] - r for b, c, r in zip(sph.body[robot], sph.center[robot],
+                                                                      sph.radius[robot])]
+    assert min(bottoms) == pytest.approx(1e-3, abs=1e-12)
+
+
+def test_box_direction_puts_the_box_that_way_facing_the_robot():
+    """With box_direction d the box centre is at middle + (r + a/2 + gap) d, yawed along d; a zero
+    or non-finite direction is refused."""
+    from cobra_ref.kinematics import forward_kinematics
+
+    model = cobra_model()
+    ref = RollingGait()
+    d = np.array([-0.6, -0.8])
+    q, _ = initial_state(model, ref, box_direction=d)
+    kin = forward_kinematics(model, q)
+    mids = [model.body_names.index(n) for n in ("L5", "L6")]
+    middle = np.mean([kin.p[i] + kin.R[i] @ model.com[i] for i in mids], axis=0)[:2]
+    box = model.boxes[0]
+    r = max(model.spheres.radius[np.isin(model.spheres.body, mids)])
+    centre = q[model.q_idx[box.body]][:2]
+    np.testing.assert_allclose(centre, middle + (r + box.half[0] + 0.05) * d, atol=1e-12)
+    qw, qz = q[model.q_idx[box.body]][3], q[model.q_idx[box.body]][6]
+    assert 2 * np.arctan2(qz, qw) == pytest.approx(np.arctan2(d[1], d[0]))
+    for bad in ([0.0, 0.0], [np.nan, 1.0]):
+        with pytest.raises(ValueError, match="box_direction"):
+            initial_state(model, ref, box_direction=bad)
