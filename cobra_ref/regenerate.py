@@ -132,8 +132,11 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
     files_opt = optimized_files(optimized_dir, gaits) if optimized_dir else {}
     if params is None:
         params = optimized_params(files_opt)
-        _say(progress, f"optimized parameters for {', '.join(params) or 'no gait'} (from {optimized_dir}); "
-                       f"defaults for the others")
+        if params:
+            _say(progress, f"optimized parameters for {', '.join(params)} (from {optimized_dir}); "
+                           f"defaults (notes C10) for any other gait")
+        else:
+            _say(progress, "default gait parameters (notes C10) for every gait")
     specs = specs_for(gaits, quick, params=params)
     _say(progress, f"simulating {len(specs)} gaits x {specs[0].duration:g} s (cache: {cache_dir})")
     results = run_all(specs, cache_dir, force=force, workers=workers, progress=progress)
