@@ -331,3 +331,19 @@ def test_with_the_pd_servo_the_optimum_respects_the_torque_and_joint_limits_at_e
     assert sh.problem_from_dict(sh.problem_to_dict(problem)).servo == "pd"
     with pytest.raises(sh.ShootingError, match="servo must be"):
         tiny_problem(servo="stiff")
+
+
+def test_figures_reoptimize_writes_one_params_json_per_gait_and_direction(tmp_path, monkeypatch):
+    """``cobra-ref figures --reoptimize`` runs ``regenerate.reoptimize``: one optimization per gait
+    and per direction goal, each written as a params JSON that replays (tiny settings here)."""
+    from cobra_ref import regenerate
+
+    monkeypatch.setattr(sh, "DEFAULTS", {"C": (GOAL, 0.3, 1)})
+    monkeypatch.setattr(regenerate, "DIRECTIONS", {"right": ("C", (0.05, -0.02))})
+    files = regenerate.reoptimize(str(tmp_path), gaits=("C",), progress=False)
+    assert sorted(files) == ["C", "direction-right"]
+    for path in files.values():
+        record = sh.load_result(path)
+        assert record["problem"].duration == 0.3 and len(record["history"]) >= 1
+    assert regenerate.optimized_files(str(tmp_path), ("C", "S")) == {"C": files["C"]}
+    assert set(regenerate.optimized_params({"C": files["C"]})["C"]) >= {"amplitude", "frequency"}
