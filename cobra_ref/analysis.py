@@ -30,9 +30,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND
+from .gaits import N_JOINTS
 from .quaternion import quat_to_rot
 
-N_JOINTS = 11
 JOINT_VELOCITIES = slice(6, 6 + N_JOINTS)  # the joint rates in qd (after the head's 6 base velocities)
 
 

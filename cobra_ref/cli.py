@@ -8,11 +8,11 @@ import dataclasses
 import json
 import os
 import sys
-import time
 
 import numpy as np
 
 from .parallel import limit_blas_threads
+from .progress import progress_printer
 from .params import CobraParameters, parameter_table
 from .robots import cobra_model
 
@@ -84,22 +84,6 @@ def c_stdout_silenced():
         os.close(devnull)
 
 
-def _progress(label: str):
-    """A progress printer on stderr: label, percentage, simulated time, time left."""
-    start = time.perf_counter()
-
-    def show(done: int, total: int) -> None:
-        elapsed = time.perf_counter() - start
-        left = elapsed / done * (total - done)
-        sys.stderr.write(f"\r{label}: {100 * done / total:5.1f} % ({done}/{total} steps), "
-                         f"{left:5.0f} s left ")
-        if done == total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
-
-    return show
-
-
 def _check_writable(path: str) -> None:
     directory = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(directory):
@@ -143,7 +127,7 @@ def run_and_write(model, reference, duration, settings, out, label, quiet=False,
     from .simulate import simulate
     from .stepper import SimulationError
 
-    progress = None if quiet else _progress(label)
+    progress = None if quiet else progress_printer(label)
     try:
         with c_stdout_silenced():
             traj = simulate(model, reference, duration, settings, q0, qd0, progress=progress)
@@ -170,7 +154,7 @@ def cmd_bench(args) -> int:
         raise SystemExit(f"error: duration must be positive and finite, got {args.duration}")
     with c_stdout_silenced():
         record = run_bench(args.duration, with_mujoco=not args.no_mujoco,
-                           progress=None if args.quiet else _progress("bench"))
+                           progress=None if args.quiet else progress_printer("bench"))
     print(format_table(record))
     if args.json:
         write_text_atomic(args.json, json.dumps(record, indent=2) + "\n")

@@ -15,7 +15,6 @@ from typing import NamedTuple
 import numpy as np
 
 from .gaits import gait_params
-from .parallel import limit_blas_threads
 from .shooting import (DECISION, DEFAULTS, RAMP_TIME, SerialExecutor, ShootingError, ShootingProblem,
                        decision_vector, load_result, make_problem, optimize, shooting_cost,
                        start_state, summary_lines, write_result)
@@ -127,7 +126,6 @@ def cmd_optimize(args) -> int:
     duration = d_duration if args.duration is None else args.duration
     maxiter = d_maxiter if args.maxiter is None else args.maxiter
     err = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
-    limit_blas_threads(1)  # 4x faster contact steps, same results (parallel.limit_blas_threads)
     from .cli import c_stdout_silenced
 
     with c_stdout_silenced():  # OSQP's "Polishing not needed" lines (workers: parallel.worker_init)

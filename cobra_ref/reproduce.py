@@ -37,6 +37,7 @@ from . import __version__
 from .gaits import gait, gait_params
 from .parallel import worker_init
 from .params import CobraParameters
+from .progress import progress_printer
 from .robots import cobra_model
 from .simulate import Trajectory, initial_state, simulate
 from .stepper import SimulationError, StepSettings
@@ -172,28 +173,16 @@ def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = No
                 _watch(futures, queue, todo, progress)
                 for f in futures:
                     f.result()  # re-raises a worker's exception here
+        done = {}
     else:
-        for s in todo:
-            run(s, cache_dir, force, _printer(s.gait) if progress else None)
-    return {s.gait: run(s, cache_dir)[0] for s in specs}
+        done = {s.gait: run(s, cache_dir, force, progress_printer(f"  {s.gait}") if progress else None)[0]
+                for s in todo}
+    return {s.gait: done[s.gait] if s.gait in done else run(s, cache_dir)[0] for s in specs}
 
 
 def _cached(spec: RunSpec, cache_dir: str) -> bool:
     path = os.path.join(cache_dir, spec.filename())
     return os.path.isfile(path) or os.path.isfile(path[:-4] + ".failed.npz")
-
-
-def _printer(name: str):
-    start = time.perf_counter()
-
-    def show(done, total):
-        left = (time.perf_counter() - start) / done * (total - done)
-        sys.stderr.write(f"\r  {name}: {100 * done / total:5.1f} %, {left:4.0f} s left ")
-        if done == total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
-
-    return show
 
 
 def _watch(futures, queue, specs, progress: bool) -> None:

@@ -30,7 +30,7 @@ def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
     if not runs:
         common.empty_panel(ax_cost, "no optimization results")
         common.empty_panel(ax_path, "no optimization results")
-    for run in runs:
+    for i, run in enumerate(runs):
         color = common.gait_color(run["gait"])
         history = run["record"]["history"]
         cost = np.array([h["cost"] for h in history], dtype=float)
@@ -51,7 +51,7 @@ def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
         n_failed = sum(1 for h in history if h.get("error"))
         if n_failed:
             ax_cost.annotate(f"{run['label']}: {n_failed} rollout(s) failed (cost {max(cost):g})",
-                             (0.02, 0.97 - 0.07 * runs.index(run)), xycoords="axes fraction", fontsize=5.5,
+                             (0.02, 0.97 - 0.07 * i), xycoords="axes fraction", fontsize=5.5,
                              va="top", color=color)
     ax_cost.set_yscale("log")
     ax_cost.set_xlabel("rollout")
