@@ -7,7 +7,8 @@ Logged per step (arrays of length N+1 for states, N for steps):
 
 * ``t, q, qd, box_pose`` (x y z qw qx qy qz), ``tau`` (N, 11) joint torques over each step;
 * solver records: ``osqp_status`` (1 solved, 2 OSQP "solved inaccurate", 3 friction fixed
-  point not converged and clipped), ``osqp_iter``, ``fp_iter``, ``complementarity``,
+  point not converged and clipped), ``osqp_iter`` (ADMM iterations), ``osqp_solves`` (OSQP
+  solves; the other fixed-point iterates were certified re-solves), ``fp_iter``, ``complementarity``,
   ``cone_residual``, ``stick_residual``, ``max_penetration``, ``cond_G``, ``n_contacts``,
   ``tau_excess`` (max |tau| - tau_max, <= 0 means within limits), ``q_excess`` (same for |q|);
 * energy: ``kinetic``, ``potential`` (at each step start), ``work_actuators`` (dt tau . u_mid
@@ -42,7 +43,7 @@ from .stepper import SimulationError, StepSettings, Stepper
 
 # per-step solver status: 1 solved, 2 OSQP "solved inaccurate", 3 friction fixed point not converged
 STATUS_CODES = {"solved": 1, "solved inaccurate": 2, "not converged": 3}
-STEP_KEYS = ("osqp_status", "osqp_iter", "fp_iter", "complementarity", "cone_residual", "stick_residual",
+STEP_KEYS = ("osqp_status", "osqp_iter", "osqp_solves", "fp_iter", "complementarity", "cone_residual", "stick_residual",
              "max_penetration", "cond_G", "n_contacts", "tau_excess", "q_excess", "kinetic", "potential",
              "work_actuators", "work_contacts")
 CONTACT_KEYS = ("contact_step", "contact_kind", "contact_body", "contact_point", "contact_normal", "contact_force")
@@ -82,10 +83,11 @@ class Trajectory:
 
     @classmethod
     def from_npz(cls, path: str) -> "Trajectory":
-        """Read back what ``to_npz`` wrote."""
+        """Read back what ``to_npz`` wrote (a step record that an older file lacks reads as NaN)."""
         with np.load(path, allow_pickle=False) as z:
+            n = len(z["tau"])
             return cls(float(z["dt"]), z["t"], z["q"], z["qd"], z["tau"], z["box_pose"],
-                       {k: z[k] for k in STEP_KEYS}, {k: z[k] for k in CONTACT_KEYS},
+                       {k: z[k] if k in z else np.full(n, np.nan) for k in STEP_KEYS}, {k: z[k] for k in CONTACT_KEYS},
                        float(z["wall_time"]), str(z["error"]), json.loads(str(z["meta"])))
 
     def to_npz(self, path: str) -> None:
@@ -251,6 +253,7 @@ class _Log:
         s, info, cs = self.steps, res.qp, res.contacts
         s["osqp_status"][k] = STATUS_CODES[info.status.split(" (")[0] if "(" not in info.status else "not converged"]
         s["osqp_iter"][k], s["fp_iter"][k] = info.iterations, info.fp_iterations
+        s["osqp_solves"][k] = info.osqp_solves
         s["complementarity"][k], s["cone_residual"][k] = info.complementarity, info.cone_residual
         s["stick_residual"][k], s["cond_G"][k] = info.stick_slip_residual, info.cond_G
         s["max_penetration"][k] = max(0.0, -float(cs.g.min())) if cs.m else 0.0

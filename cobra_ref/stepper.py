@@ -60,6 +60,7 @@ class StepSettings:
     friction: str = "fixed-point"  # or "convex" (contact_qp module docstring)
     reg: float = 1e-6
     fp_max: int = 10  # friction fixed-point iterates per step (warm-started; contact_qp docstring)
+    fp_path: str = "active-set"  # or "osqp": OSQP for every iterate, the reference (contact_qp.ContactQP)
     margin: float = 0.01  # candidate contacts within 10 mm
     beta: float = 0.2  # fraction of a penetration removed per step
     max_start_penetration: float = 0.005
@@ -92,7 +93,7 @@ class Stepper:
         self.model, self.s = model, settings
         self.chain = ChainModel(model)
         self.qp = ContactQP(model.mu, settings.n_facets, settings.reg, friction=settings.friction,
-                            fp_max=settings.fp_max)
+                            fp_max=settings.fp_max, fp_path=settings.fp_path)
         # actuated = revolute joints (one dof each); a model may have none (a lone ball or box)
         revolute = [i for i, jt in enumerate(model.joint_type) if jt != "free"]
         self.act = np.array([model.v_idx[i].start for i in revolute], dtype=int)
@@ -135,16 +136,18 @@ class Stepper:
         # Step 3: contacts, J_c (eq. 3-4), Delassus G and free velocity c (eq. 5)
         contacts = find_contacts(model, terms, s.margin, self._hint)
         J = contact_jacobian(self.chain, terms, contacts)
-        Minv_JT = _chol_solve(L, J[:, F].T)
-        G = J[:, F] @ Minv_JT
+        # G = J_F M_FF^-1 J_F^T = B^T B with B = L^-1 J_F^T (M_FF = L L^T)
+        B = solve_triangular(L, J[:, F].T, lower=True, check_finite=False)
+        Minv_JT = solve_triangular(L.T, B, lower=False, check_finite=False)
+        G = B.T @ B
         c = J @ qd_next
         g_stab = np.where(contacts.g >= 0, contacts.g, s.beta * contacts.g)
         c[0::3] += g_stab / dt
         clock.append(time.perf_counter())
         # Step 4: least action, eq. (6)
         keys = contacts.keys()
-        p_warm = np.concatenate([self._warm.get(k, np.zeros(3)) for k in keys]) if keys else None
-        p, info = self.qp.solve(G, c, p_warm, mu=self._mu(contacts))
+        p_warm, y_warm = self._warm_start(keys)
+        p, info = self.qp.solve(G, c, p_warm, mu=self._mu(contacts), y_warm=y_warm, G_factor=B.T)
         clock.append(time.perf_counter())
         qd_next[F] += Minv_JT @ p
         w = J @ qd_next
@@ -169,9 +172,21 @@ class Stepper:
         """Friction coefficient per contact: model.mu, or model.mu_robot_box for robot-box pairs."""
         return np.where(contacts.kind == ROBOT_BOX, self.model.mu_rb, self.model.mu)
 
+    def _warm_start(self, keys):
+        """This step's starting impulses and OSQP duals: the previous step's, contact by contact
+        (zero for a new contact)."""
+        if not keys:
+            return None, None
+        k_y = 1 + len(self.qp.D) * (1 if self.s.friction == "fixed-point" else 2)
+        zero = (np.zeros(3), np.zeros(k_y))
+        warm = [self._warm.get(k, zero) for k in keys]
+        return (np.concatenate([w[0] for w in warm]),
+                self.qp.duals_stacked(np.stack([w[1] for w in warm])))
+
     def _remember(self, keys, p, w, contacts):
         """Warm starts and the sliding directions for the next step's contact frames."""
-        self._warm = {k: p[3 * i:3 * i + 3] for i, k in enumerate(keys)}
+        Y = self.qp.duals_per_contact(self.qp.y, len(keys)) if keys else None
+        self._warm = {k: (p[3 * i:3 * i + 3], Y[i]) for i, k in enumerate(keys)}
         self._hint = {}
         for i, k in enumerate(keys):
             w_T = contacts.frame[i][:, 1:] @ w[3 * i + 1:3 * i + 3]

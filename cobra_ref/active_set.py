@@ -1,0 +1,193 @@
+"""Certified active-set solves of the contact QP: a guess of the active set, and a KKT proof.
+
+Helper (performance) for the friction fixed point of [COBRA] eq. (6) in
+:mod:`cobra_ref.contact_qp`: its iterates are one QP whose friction bounds move a little from
+one iterate to the next, and whose active set (the contacts that are released, the ones that
+slide) seldom changes from one iterate, or one step, to the next. The QP, in OSQP's form::
+
+    min_x 1/2 x^T P x + q^T x    s.t.  l <= A x <= u          (P positive definite)
+
+With W the rows guessed to sit at a bound, v_W that bound (l or u), the equality-constrained
+problem is one linear (KKT) system::
+
+    [ P    A_W^T ] [ x   ]   [ -q  ]
+    [ A_W  0     ] [ y_W ] = [ v_W ],      y = 0 on the rows not in W
+
+and OSQP's optimality conditions P x + q + A^T y = 0, y_i > 0 only at u_i, y_i < 0 only at
+l_i, l <= A x <= u, are then sufficient for the minimiser (P > 0: the QP is strictly convex,
+its minimiser unique). So the answer is *certified*: it is returned only if
+
+    l_i - tol <= (A x)_i <= u_i + tol      on every row not in W        (primal feasible)
+    y_i >= -tol at an upper bound,  y_i <= tol at a lower bound          (dual feasible)
+    |P x + q + A^T y| <= eps_abs + eps_rel * max(|P x|, |A^T y|, |q|)   (stationarity)
+
+with tol = eps_abs + eps_rel * scale, OSQP's own termination test, so an accepted answer is as
+accurate as OSQP's. Otherwise the caller asks OSQP. Rows with l_i = u_i (a contact whose
+friction bound is zero) are always in W and their y may take either sign.
+
+With K = 4 facets every row of A bounds one impulse component (A is a signed permutation), so
+the QP is box-constrained, lo <= x <= hi, and the guess is improved by the primal-dual
+active-set iteration of Hintermueller, Ito & Kunisch (SIAM J. Optim. 13, 2002), with
+g = P x + q and d = diag(P)::
+
+    held at lo:  x_i - g_i / d_i <= lo_i,     held at hi:  x_i - g_i / d_i >= hi_i
+    x_W = bound,  P_FF x_F = -(q_F + P_FW x_W)           (Cholesky on the free variables)
+
+repeated until the held set stops changing (at most ``ROUNDS`` times), then certified. For
+other A (K = 8) the one guess from the starting iterate is solved and certified.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from scipy import linalg
+
+
+class WorkingSet(NamedTuple):
+    """Which rows are held at a bound: at_lower (l_i) or at_upper (u_i), as boolean masks."""
+
+    at_lower: np.ndarray
+    at_upper: np.ndarray
+
+
+def working_set(Ax: np.ndarray, y: np.ndarray, l: np.ndarray, u: np.ndarray) -> WorkingSet:
+    """The rows an iterate (A x, y) points at, by OSQP's polishing rule; rows with l = u included.
+
+    Helper: row i is held at l_i if (A x)_i - l_i < -y_i and at u_i if u_i - (A x)_i < y_i
+    (closer to the bound than its multiplier is large; a violated row counts as held).
+    """
+    fixed = l == u
+    at_upper = u - Ax < y
+    return WorkingSet((Ax - l < -y) & ~at_upper | (fixed & ~at_upper), at_upper)
+
+
+ROUNDS = 3  # primal-dual active-set rounds before giving up (and asking OSQP)
+_posv = linalg.get_lapack_funcs("posv", (np.zeros(1),))
+
+
+class BoxForm(NamedTuple):
+    """A constraint matrix that is a signed permutation: row r bounds variable col[r] (times sign[r])."""
+
+    col: np.ndarray
+    sign: np.ndarray
+
+
+def box_form(A: np.ndarray) -> BoxForm | None:
+    """The BoxForm of A, or None if some row of A is not one +-1 entry on a column of its own."""
+    nonzero = A != 0
+    if A.shape[0] != A.shape[1] or not np.all(nonzero.sum(axis=1) == 1):
+        return None
+    col = np.argmax(nonzero, axis=1)
+    sign = A[np.arange(len(col)), col]
+    if len(np.unique(col)) != len(col) or not np.all(np.abs(sign) == 1.0):
+        return None
+    return BoxForm(col, sign)
+
+
+def certified_solve(P, q, A, l, u, x0, y0, eps_abs: float, eps_rel: float, box: BoxForm | None = None):
+    """(x, y) of the QP, certified (module docstring), starting from the iterate (x0, y0); or None.
+
+    ``box``: ``box_form(A)`` if A is a signed permutation (then the active-set iteration runs).
+    """
+    if box is None:
+        return solve_on_working_set(P, q, A, l, u, working_set(A @ x0, y0, l, u), eps_abs, eps_rel)
+    # the bounds per variable: l_r <= s_r x_c <= u_r
+    lo, hi = np.empty(len(q)), np.empty(len(q))
+    lo[box.col] = np.where(box.sign > 0, l, -u)
+    hi[box.col] = np.where(box.sign > 0, u, -l)
+    solved = solve_box(P, q, lo, hi, x0, eps_abs, eps_rel)
+    if solved is None:
+        return None
+    x, held, g = solved
+    # OSQP's duals: g_c + s_r y_r = 0 on held rows, 0 on free ones
+    y = np.where(held[box.col], -g[box.col] * box.sign, 0.0)
+    return x, y
+
+
+def solve_box(P, q, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = ROUNDS):
+    """min 1/2 x^T P x + q^T x s.t. lo <= x <= hi by primal-dual active-set rounds from x0.
+
+    Helper: returns (x, held, g) certified by the KKT conditions at OSQP's tolerances, with
+    held the mask of variables at a bound and g = P x + q; or None.
+    """
+    d = P.diagonal()
+    fixed = lo == hi
+    x, held_before, hi_before = x0, None, None
+    for _ in range(rounds + 1):
+        g = P @ x + q
+        trial = x - g / d
+        at_hi = (trial >= hi) & ~fixed
+        held = (trial <= lo) | fixed | at_hi
+        if held_before is not None and (held == held_before).all() and (at_hi == hi_before).all():
+            break
+        held_before, hi_before = held, at_hi
+        x = np.where(at_hi, hi, lo)
+        free = ~held
+        if free.any():
+            x[free] = 0.0
+            # P_FF x_F = -(q_F + P_FW x_W): LAPACK's Cholesky solve (posv)
+            P_F = P[free]
+            _, x_F, info = _posv(P_F[:, free], -(q[free] + P_F @ x), lower=True)
+            if info != 0:
+                return None
+            x[free] = x_F
+    else:
+        return None  # the held set still changes: leave it to OSQP
+    # the certificate (module docstring), for the box form
+    free = ~held
+    at_lo = held & ~at_hi & ~fixed
+    tol_primal = eps_abs + eps_rel * float(np.abs(x).max())
+    x_F = x[free]
+    if (x_F < lo[free] - tol_primal).any() or (x_F > hi[free] + tol_primal).any():
+        return None
+    tol_dual = eps_abs + eps_rel * float(np.abs(g[held]).max(initial=0.0))
+    if (g[at_lo] < -tol_dual).any() or (g[at_hi] > tol_dual).any():
+        return None
+    scale = max(float(np.abs(g - q).max()), float(np.abs(q).max()))
+    if not (np.isfinite(x).all() and np.abs(g[free]).max(initial=0.0) <= eps_abs + eps_rel * scale):
+        return None
+    return x, held, g
+
+
+def solve_on_working_set(P: np.ndarray, q: np.ndarray, A: np.ndarray, l: np.ndarray, u: np.ndarray,
+                         ws: WorkingSet, eps_abs: float, eps_rel: float):
+    """(x, y) of the QP if the working set ``ws`` is its active set (certified), else None.
+
+    Helper: the KKT solve (LU, one step of iterative refinement: the system is ill-conditioned
+    when contacts are redundant) and the checks of the module docstring.
+    """
+    W = ws.at_lower | ws.at_upper
+    n, rows = len(q), np.flatnonzero(W)
+    A_W = A[rows]
+    K = np.zeros((n + len(rows), n + len(rows)))
+    K[:n, :n] = P
+    K[:n, n:] = A_W.T
+    K[n:, :n] = A_W
+    rhs = np.concatenate([-q, np.where(ws.at_upper, u, l)[rows]])
+    try:
+        lu = linalg.lu_factor(K, check_finite=False)
+        sol = linalg.lu_solve(lu, rhs, check_finite=False)
+        sol += linalg.lu_solve(lu, rhs - K @ sol, check_finite=False)
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+    x = sol[:n]
+    y = np.zeros(len(l))
+    y[rows] = sol[n:]
+    Ax = A @ x
+    finite = np.isfinite(u)
+    tol_primal = eps_abs + eps_rel * float(np.max(np.abs(Ax), initial=0.0))
+    tol_dual = eps_abs + eps_rel * float(np.max(np.abs(y), initial=0.0))
+    free = ~W
+    if np.any(Ax[free] < l[free] - tol_primal) or np.any((Ax > u + tol_primal)[free & finite]):
+        return None
+    fixed = l == u
+    if np.any(y[ws.at_upper & ~fixed] < -tol_dual) or np.any(y[ws.at_lower & ~fixed] > tol_dual):
+        return None
+    # stationarity, measured, not assumed from the linear solve
+    Px, ATy = P @ x, A.T @ y
+    scale = max(float(np.max(np.abs(Px))), float(np.max(np.abs(ATy))), float(np.max(np.abs(q))))
+    if not (np.all(np.isfinite(x)) and np.max(np.abs(Px + q + ATy)) <= eps_abs + eps_rel * scale):
+        return None
+    return x, y
