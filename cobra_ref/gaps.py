@@ -150,6 +150,10 @@ def sphere_box_gap(center, radius, R_box, p_box, half, t_hint=None) -> Gap:
     return Gap(float(g), n, c - r * n, p + R @ q_b, contact_frame(n, t_hint))
 
 
+# the sign pattern of corner k in box coordinates, k = 0 .. 7 (box_corners)
+CORNER_SIGNS = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
+
+
 def box_corners(R_box, p_box, half) -> np.ndarray:
     """The 8 world corners of a box, (8, 3), corner k = p + R (s_k * half).
 
@@ -157,8 +161,7 @@ def box_corners(R_box, p_box, half) -> np.ndarray:
     (-,-,-), corner 1 is (-,-,+), ..., corner 7 is (+,+,+) in box coordinates.
     """
     R, p, h = _check_box(R_box, p_box, half)
-    s = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
-    return p + (s * h) @ R.T
+    return p + (CORNER_SIGNS * h) @ R.T
 
 
 def box_corner_plane_gaps(R_box, p_box, half, t_hint=None) -> list[Gap]:
@@ -190,7 +193,9 @@ def contact_frames(n: np.ndarray, t_hint: np.ndarray) -> np.ndarray:
     seed = a - np.sum(a * n, axis=1, keepdims=True) * n
     t1 = np.where(use_hint[:, None], t_perp, seed)
     t1 = t1 / np.linalg.norm(t1, axis=1, keepdims=True)
-    return np.stack([n, t1, cross_rows(n, t1)], axis=2)
+    frames = np.empty((len(n), 3, 3))
+    frames[:, :, 0], frames[:, :, 1], frames[:, :, 2] = n, t1, cross_rows(n, t1)
+    return frames
 
 
 def sphere_box_gaps(centers: np.ndarray, radii: np.ndarray, R_box: np.ndarray, p_box: np.ndarray,

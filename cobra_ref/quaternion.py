@@ -7,6 +7,8 @@ otherwise; cobra_ref never hands a quaternion to scipy.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -30,9 +32,13 @@ def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
     Helper: the Hamilton product (w-first).
     """
-    aw, av = a[0], a[1:]
-    bw, bv = b[0], b[1:]
-    return np.concatenate([[aw * bw - av @ bv], aw * bv + bw * av + np.cross(av, bv)])
+    aw, ax, ay, az = (float(v) for v in a)
+    bw, bx, by, bz = (float(v) for v in b)
+    # (aw bw - a.b,  aw b + bw a + a x b)
+    return np.array([aw * bw - (ax * bx + ay * by + az * bz),
+                     aw * bx + bw * ax + (ay * bz - az * by),
+                     aw * by + bw * ay + (az * bx - ax * bz),
+                     aw * bz + bw * az + (ax * by - ay * bx)])
 
 
 def quat_exp(rotvec: np.ndarray) -> np.ndarray:
@@ -40,11 +46,13 @@ def quat_exp(rotvec: np.ndarray) -> np.ndarray:
 
     Helper: exp(rotvec / 2) as a unit quaternion, as in MuJoCo's ``mju_quatIntegrate``.
     """
-    angle = float(np.linalg.norm(rotvec))
+    x, y, z = (float(v) for v in rotvec)
+    angle = math.sqrt(x * x + y * y + z * z)
     if angle < 1e-12:
         # second-order Taylor expansion of (cos(a/2), sin(a/2)/a * rotvec)
-        return np.concatenate([[1.0 - angle**2 / 8.0], 0.5 * rotvec])
-    return np.concatenate([[np.cos(angle / 2)], np.sin(angle / 2) / angle * rotvec])
+        return np.array([1.0 - angle**2 / 8.0, 0.5 * x, 0.5 * y, 0.5 * z])
+    k = math.sin(angle / 2) / angle
+    return np.array([math.cos(angle / 2), k * x, k * y, k * z])
 
 
 def rot_to_quat(R: np.ndarray) -> np.ndarray:

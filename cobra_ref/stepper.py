@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from scipy.linalg import solve_triangular
+from scipy.linalg import get_lapack_funcs
 
 from .contact import ROBOT_BOX, Contacts, contact_jacobian, find_contacts
 from .contact_qp import ContactQP, QPInfo
@@ -128,17 +128,17 @@ class Stepper:
         # Step 2: eq. (1) without contact for the free coordinates F
         tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
         F, P = self.free, self.prescribed
-        M_FF = M[np.ix_(F, F)]
-        rhs = dt * (tau[F] + tau_ext[F] - h[F]) - M[np.ix_(F, P)] @ (qd_next[P] - qd[P])
-        L = np.linalg.cholesky(M_FF)
-        qd_next[F] = qd[F] + _chol_solve(L, rhs)
+        M_F = M[F]
+        rhs = dt * (tau[F] + tau_ext[F] - h[F]) - M_F[:, P] @ (qd_next[P] - qd[P])
+        L = _cholesky(M_F[:, F])
+        qd_next[F] = qd[F] + _potrs(L, rhs, lower=1)[0]
         clock.append(time.perf_counter())
         # Step 3: contacts, J_c (eq. 3-4), Delassus G and free velocity c (eq. 5)
         contacts = find_contacts(model, terms, s.margin, self._hint)
         J = contact_jacobian(self.chain, terms, contacts)
         # G = J_F M_FF^-1 J_F^T = B^T B with B = L^-1 J_F^T (M_FF = L L^T)
-        B = solve_triangular(L, J[:, F].T, lower=True, check_finite=False)
-        Minv_JT = solve_triangular(L.T, B, lower=False, check_finite=False)
+        B = _trtrs(L, J[:, F].T, lower=1)[0]
+        Minv_JT = _trtrs(L, B, lower=1, trans=1)[0]
         G = B.T @ B
         c = J @ qd_next
         g_stab = np.where(contacts.g >= 0, contacts.g, s.beta * contacts.g)
@@ -161,7 +161,7 @@ class Stepper:
         work_contacts = float(p @ (J @ u_mid))
         kinetic = 0.5 * qd @ M @ qd
         potential = self._potential(terms)
-        q_next = integrate(model, q, qd_next, dt)
+        q_next = integrate(model, q, qd_next, dt, check=False)
         clock.append(time.perf_counter())
         for phase, t0, t1 in zip(PHASES, clock[:-1], clock[1:]):
             self.timing[phase] += t1 - t0
@@ -174,24 +174,25 @@ class Stepper:
 
     def _warm_start(self, keys):
         """This step's starting impulses and OSQP duals: the previous step's, contact by contact
-        (zero for a new contact)."""
+        (zero for a new contact). Each remembered row is [p_N, p_t1, p_t2, duals...]."""
         if not keys:
             return None, None
         k_y = 1 + len(self.qp.D) * (1 if self.s.friction == "fixed-point" else 2)
-        zero = (np.zeros(3), np.zeros(k_y))
-        warm = [self._warm.get(k, zero) for k in keys]
-        return (np.concatenate([w[0] for w in warm]),
-                self.qp.duals_stacked(np.stack([w[1] for w in warm])))
+        zero = np.zeros(3 + k_y)
+        rows = np.array([self._warm.get(k, zero) for k in keys])
+        return rows[:, :3].ravel(), self.qp.duals_stacked(rows[:, 3:])
 
     def _remember(self, keys, p, w, contacts):
         """Warm starts and the sliding directions for the next step's contact frames."""
-        Y = self.qp.duals_per_contact(self.qp.y, len(keys)) if keys else None
-        self._warm = {k: (p[3 * i:3 * i + 3], Y[i]) for i, k in enumerate(keys)}
-        self._hint = {}
-        for i, k in enumerate(keys):
-            w_T = contacts.frame[i][:, 1:] @ w[3 * i + 1:3 * i + 3]
-            if np.linalg.norm(w_T) > 1e-6:
-                self._hint[k] = w_T
+        if not keys:
+            self._warm, self._hint = {}, {}
+            return
+        rows = np.concatenate([p.reshape(-1, 3), self.qp.duals_per_contact(self.qp.y, len(keys))], axis=1)
+        self._warm = dict(zip(keys, rows))
+        # sliding velocity w_T = t1 w_t1 + t2 w_t2 (world) of the contacts that slip faster than 1 mm/s
+        w_T = np.einsum("kij,kj->ki", contacts.frame[:, :, 1:], w.reshape(-1, 3)[:, 1:])
+        sliding = np.flatnonzero(np.einsum("ki,ki->k", w_T, w_T) > 1e-12)
+        self._hint = {keys[i]: w_T[i] for i in sliding.tolist()}
 
     def _potential(self, terms) -> float:
         com_w = terms.p + np.einsum("bij,bj->bi", terms.R, self.chain.com)
@@ -210,7 +211,14 @@ def _finite(values: np.ndarray, t: float) -> np.ndarray:
     return values
 
 
-def _chol_solve(L: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Solve (L L^T) X = B."""
-    Y = solve_triangular(L, B, lower=True, check_finite=False)
-    return solve_triangular(L.T, Y, lower=False, check_finite=False)
+# LAPACK's Cholesky factor and solves, called directly (scipy.linalg's wrappers cost more
+# than the 12 x 12 solves themselves)
+_potrf, _potrs, _trtrs = get_lapack_funcs(("potrf", "potrs", "trtrs"), (np.zeros(1),))
+
+
+def _cholesky(A: np.ndarray) -> np.ndarray:
+    """Lower Cholesky factor L of a symmetric positive definite A = L L^T."""
+    L, info = _potrf(A, lower=1, clean=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"the mass matrix of the free coordinates is not positive definite (info {info})")
+    return L
