@@ -87,44 +87,64 @@ def box_form(A: np.ndarray) -> BoxForm | None:
 
 
 def certified_solve(P, q, A, l, u, x0, y0, eps_abs: float, eps_rel: float, box: BoxForm | None = None):
-    """(x, y) of the QP, certified (module docstring), starting from the iterate (x0, y0); or None.
+    """(x, y, at_lo, at_hi) of the QP, certified (module docstring), from the iterate (x0, y0); or None.
 
-    ``box``: ``box_form(A)`` if A is a signed permutation (then the active-set iteration runs).
+    The first guess of the active set is the one (x0, y0) points at (``working_set``).
+    ``box``: ``box_form(A)`` if A is a signed permutation; then the active-set rounds run, and
+    at_lo/at_hi are the (n,) masks of the variables held at their lower/upper bound. For other
+    A the first guess is the only one, and at_lo/at_hi are None.
     """
     if box is None:
-        return solve_on_working_set(P, q, A, l, u, working_set(A @ x0, y0, l, u), eps_abs, eps_rel)
+        solved = solve_on_working_set(P, q, A, l, u, working_set(A @ x0, y0, l, u), eps_abs, eps_rel)
+        return None if solved is None else (*solved, None, None)
     # the bounds per variable: l_r <= s_r x_c <= u_r
     lo, hi = np.empty(len(q)), np.empty(len(q))
     lo[box.col] = np.where(box.sign > 0, l, -u)
     hi[box.col] = np.where(box.sign > 0, u, -l)
-    solved = solve_box(P, q, lo, hi, x0, eps_abs, eps_rel)
+    solved = solve_box(P, q, lo, hi, x0, eps_abs, eps_rel, guess=held_variables(box, x0, y0, l, u))
     if solved is None:
         return None
-    x, held, g = solved
+    x, at_lo, at_hi, g = solved
     # OSQP's duals: g_c + s_r y_r = 0 on held rows, 0 on free ones
-    y = np.where(held[box.col], -g[box.col] * box.sign, 0.0)
-    return x, y
+    y = np.where((at_lo | at_hi)[box.col], -g[box.col] * box.sign, 0.0)
+    return x, y, at_lo, at_hi
 
 
-def solve_box(P, q, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = ROUNDS):
+def held_variables(box: BoxForm, x, y, l, u):
+    """(at_lo, at_hi): the variables that the iterate (x, y) holds at their lower/upper bound
+    (``working_set`` on the rows, mapped to the variables they bound)."""
+    ws = working_set(x[box.col] * box.sign, y, l, u)
+    at_lo, at_hi = np.empty(len(x), dtype=bool), np.empty(len(x), dtype=bool)
+    at_lo[box.col] = np.where(box.sign > 0, ws.at_lower, ws.at_upper)
+    at_hi[box.col] = np.where(box.sign > 0, ws.at_upper, ws.at_lower)
+    return at_lo, at_hi
+
+
+def solve_box(P, q, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = ROUNDS, guess=None):
     """min 1/2 x^T P x + q^T x s.t. lo <= x <= hi by primal-dual active-set rounds from x0.
 
-    Helper: returns (x, held, g) certified by the KKT conditions at OSQP's tolerances, with
-    held the mask of variables at a bound and g = P x + q; or None.
+    Helper: returns (x, at_lo, at_hi, g) certified by the KKT conditions at OSQP's tolerances,
+    with at_lo/at_hi the masks of the variables held at lo/hi and g = P x + q; or None.
+    ``guess``: (at_lo, at_hi) to start from instead of the rule applied to x0.
     """
     d = P.diagonal()
     fixed = lo == hi
-    x, held_before, hi_before = x0, None, None
-    for _ in range(rounds + 1):
+    x, before = x0, None
+    for r in range(rounds + 1):
         g = P @ x + q
-        trial = x - g / d
-        at_hi = (trial >= hi) & ~fixed
-        held = (trial <= lo) | fixed | at_hi
-        if held_before is not None and (held == held_before).all() and (at_hi == hi_before).all():
+        if r == 0 and guess is not None:
+            at_lo, at_hi = guess
+            at_hi = at_hi & ~fixed
+            at_lo = (at_lo | fixed) & ~at_hi
+        else:
+            trial = x - g / d
+            at_hi = (trial >= hi) & ~fixed
+            at_lo = ((trial <= lo) | fixed) & ~at_hi
+        if before is not None and (at_lo == before[0]).all() and (at_hi == before[1]).all():
             break
-        held_before, hi_before = held, at_hi
+        before = at_lo, at_hi
         x = np.where(at_hi, hi, lo)
-        free = ~held
+        free = ~(at_lo | at_hi)
         if free.any():
             x[free] = 0.0
             # P_FF x_F = -(q_F + P_FW x_W): LAPACK's Cholesky solve (posv)
@@ -136,19 +156,18 @@ def solve_box(P, q, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = RO
     else:
         return None  # the held set still changes: leave it to OSQP
     # the certificate (module docstring), for the box form
-    free = ~held
-    at_lo = held & ~at_hi & ~fixed
+    free = ~(at_lo | at_hi)
     tol_primal = eps_abs + eps_rel * float(np.abs(x).max())
     x_F = x[free]
     if (x_F < lo[free] - tol_primal).any() or (x_F > hi[free] + tol_primal).any():
         return None
-    tol_dual = eps_abs + eps_rel * float(np.abs(g[held]).max(initial=0.0))
-    if (g[at_lo] < -tol_dual).any() or (g[at_hi] > tol_dual).any():
+    tol_dual = eps_abs + eps_rel * float(np.abs(g[~free]).max(initial=0.0))
+    if (g[at_lo & ~fixed] < -tol_dual).any() or (g[at_hi] > tol_dual).any():
         return None
     scale = max(float(np.abs(g - q).max()), float(np.abs(q).max()))
     if not (np.isfinite(x).all() and np.abs(g[free]).max(initial=0.0) <= eps_abs + eps_rel * scale):
         return None
-    return x, held, g
+    return x, at_lo, at_hi, g
 
 
 def solve_on_working_set(P: np.ndarray, q: np.ndarray, A: np.ndarray, l: np.ndarray, u: np.ndarray,

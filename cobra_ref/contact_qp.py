@@ -61,7 +61,7 @@ import numpy as np
 import osqp
 from scipy import sparse
 
-from .active_set import box_form, certified_solve, working_set
+from .active_set import box_form, certified_solve, held_variables
 
 
 class ContactSolveError(RuntimeError):
@@ -181,11 +181,12 @@ class ContactQP:
             self.y = np.zeros(0)
             return np.zeros(0), QPInfo("solved", 0, 0, 0.0, 0.0, 0.0, 1.0, 0)
         mu = np.full(m, self.mu) if mu is None else np.broadcast_to(np.asarray(mu, dtype=float), (m,))
-        if not (np.all(np.isfinite(mu)) and np.all(mu >= 0)):
+        if not (np.isfinite(mu).all() and (mu >= 0).all()):
             raise ValueError(f"friction coefficients must be finite and >= 0, got {mu}")
         # eq. (6) with a small uniform regularization eps I (module docstring)
-        eps_I = self.reg * max(np.mean(np.diag(G)), 1e-300)
-        P = G + eps_I * np.eye(3 * m)
+        eps_I = self.reg * max(G.trace() / (3 * m), 1e-300)
+        P = G.copy()
+        P.flat[::3 * m + 1] += eps_I
         p0 = np.zeros(3 * m) if p_warm is None else np.asarray(p_warm, dtype=float).copy()
         n_rows = m * (1 + (1 if self.friction == "fixed-point" else 2) * len(self.D))
         y0 = np.zeros(n_rows) if y_warm is None else np.asarray(y_warm, dtype=float)
@@ -275,7 +276,7 @@ class ContactQP:
         # the tight (reference) solver is set up or updated only when it is needed
         solver = None if fast else self._solver(m, P, c)
         loose = self._solver(m, P, c, loose=True) if fast else None
-        A = self._A_dense[m]
+        A, box = self._A_dense[m], self._box[m]
         pbar_N = np.maximum(p[0::3], 0.0)
         total, solves, inaccurate, damped, last_change = 0, 0, False, False, np.inf
         best = (np.inf, p)  # the iterate closest to a fixed point: what is kept if none is reached
@@ -298,8 +299,9 @@ class ContactQP:
                 solver.warm_start(x=p, y=y)
                 p, y, it, bad = self._run(solver, m, l, u)
                 total, solves, inaccurate = total + it, solves + 1, inaccurate or bad
+                held = None if box is None else held_variables(box, p, y, l, u)
             else:
-                p, y = certified
+                p, y, *held = certified
                 self.y = y
             p_N = np.maximum(p[0::3], 0.0)
             change = np.abs(p_N - pbar_N).max()
@@ -313,29 +315,13 @@ class ContactQP:
             # contract (two-cycles)
             stalled = change > 0.9 * last_change
             damped = damped or (stalled and last_update == "plain")
-            newton = None if stalled and last_update == "newton" else self._newton_update(P, c, A, l, u, p, y, mu)
+            newton = None if (stalled and last_update == "newton") or box is None else _newton_update(P, c, mu, *held)
             if newton is not None:
                 pbar_N, last_update = newton, "newton"
             else:
                 pbar_N, last_update = (0.5 * (pbar_N + p_N) if damped else p_N), "plain"
             last_change = change
         return best[1], total, self.fp_max, solves, False, inaccurate
-
-    def _newton_update(self, P, c, A, l, u, p, y, mu):
-        """The next pbar_N: the normal impulses of ``coulomb_fixed_point`` on the active set
-        that the iterate (p, y) points at; None if the pyramid is not K = 4 or the solve fails."""
-        box = self._box[len(c) // 3]
-        if box is None:
-            return None
-        ws = working_set(A @ p, y, l, u)
-        at_lo, at_hi = np.zeros(len(c), dtype=bool), np.zeros(len(c), dtype=bool)
-        at_lo[box.col] = np.where(box.sign > 0, ws.at_lower, ws.at_upper)
-        at_hi[box.col] = np.where(box.sign > 0, ws.at_upper, ws.at_lower)
-        try:
-            p_N = coulomb_fixed_point(P, c, mu, at_lo, at_hi)[0::3]
-        except np.linalg.LinAlgError:
-            return None
-        return np.maximum(p_N, 0.0) if np.all(np.isfinite(p_N)) else None
 
     def _certify(self, P, c, A, l, u, x, y):
         """(x, y) re-solved on the active set that (x, y) points at, if certified, else None."""
@@ -350,6 +336,16 @@ class ContactQP:
         scale = np.where(worst > mu * p_N, mu * p_N / np.maximum(worst, 1e-300), 1.0)
         p[0::3], p[1::3], p[2::3] = p_N, p_T[:, 0] * scale, p_T[:, 1] * scale
         return p
+
+
+def _newton_update(P, c, mu, at_lo, at_hi):
+    """The next pbar_N: the normal impulses of ``coulomb_fixed_point`` on the active set
+    (at_lo, at_hi) of the last iterate (K = 4), clipped at 0; None if the solve fails."""
+    try:
+        p_N = coulomb_fixed_point(P, c, mu, at_lo, at_hi)[0::3]
+    except np.linalg.LinAlgError:
+        return None
+    return np.maximum(p_N, 0.0) if np.isfinite(p_N).all() else None
 
 
 def coulomb_fixed_point(P: np.ndarray, c: np.ndarray, mu: np.ndarray, at_lo: np.ndarray,

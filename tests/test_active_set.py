@@ -26,9 +26,10 @@ def test_diagonal_box_qp_is_solved_by_clipping_the_unconstrained_minimiser():
     """
     P, q = np.diag([1.0, 2.0, 4.0]), np.array([-3.0, 1.0, -2.0])
     lo, hi = np.array([0.0, 0.0, -1.0]), np.array([2.0, np.inf, 1.0])
-    x, held, g = solve_box(P, q, lo, hi, np.zeros(3), EPS, EPS)
+    x, at_lo, at_hi, g = solve_box(P, q, lo, hi, np.zeros(3), EPS, EPS)
     np.testing.assert_allclose(x, [2.0, 0.0, 0.5], atol=1e-15)
-    np.testing.assert_array_equal(held, [True, True, False])
+    np.testing.assert_array_equal(at_lo, [False, True, False])
+    np.testing.assert_array_equal(at_hi, [True, False, False])
     np.testing.assert_allclose(g, [-1.0, 1.0, 0.0], atol=1e-15)
 
 
@@ -41,7 +42,7 @@ def test_a_coupled_box_qp_reaches_the_minimiser_from_a_wrong_start_in_a_few_roun
     Started from (0, 5) (x_0 held, x_1 free: the wrong set), the rounds must find it.
     """
     P, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-4.0, 1.0])
-    x, held, g = solve_box(P, q, np.zeros(2), np.full(2, np.inf), np.array([0.0, 5.0]), EPS, EPS)
+    x, at_lo, at_hi, g = solve_box(P, q, np.zeros(2), np.full(2, np.inf), np.array([0.0, 5.0]), EPS, EPS)
     np.testing.assert_allclose(x, [2.0, 0.0], atol=1e-14)
     np.testing.assert_allclose(g, [0.0, 3.0], atol=1e-14)
 
