@@ -63,7 +63,7 @@ def working_set(Ax: np.ndarray, y: np.ndarray, l: np.ndarray, u: np.ndarray) -> 
     return WorkingSet((Ax - l < -y) & ~at_upper | (fixed & ~at_upper), at_upper)
 
 
-ROUNDS = 3  # primal-dual active-set rounds before giving up (and asking OSQP)
+ROUNDS = 8  # primal-dual active-set rounds before giving up (and asking OSQP); 3 or 5 left more to OSQP
 _posv = linalg.get_lapack_funcs("posv", (np.zeros(1),))
 
 
