@@ -24,7 +24,7 @@ import numpy as np
 
 from . import gaps as gapfn
 from .fastdyn import ChainModel, ChainTerms
-from .spatial import cross_rows
+from .spatial import skew_rows
 
 KINDS = ("robot-ground", "robot-box", "box-ground")
 ROBOT_GROUND, ROBOT_BOX, BOX_GROUND = 0, 1, 2
@@ -64,26 +64,38 @@ def find_contacts(model, terms: ChainTerms, margin: float, t_hint: dict | None =
     centers = terms.p[sph.body] + np.einsum("sij,sj->si", terms.R[sph.body], sph.center)
     # robot spheres on the ground: g = c_z - r, n = e_z (gaps.sphere_plane_gap)
     s = np.flatnonzero(centers[:, 2] - sph.radius < margin)
-    parts = [(ROBOT_GROUND, sph.body[s], np.full(len(s), -1), s, centers[s, 2] - sph.radius[s],
-              np.tile(gapfn.e_z, (len(s), 1)), centers[s] - sph.radius[s, None] * gapfn.e_z,
-              centers[s] * [1.0, 1.0, 0.0])]
+    counts = [len(s)]
+    body_A, feature, g = [sph.body[s]], [s], [centers[s, 2] - sph.radius[s]]
+    n = [np.broadcast_to(gapfn.e_z, (len(s), 3))]
+    point_A, point_B = [centers[s] - sph.radius[s, None] * gapfn.e_z], [centers[s] * [1.0, 1.0, 0.0]]
+    box_bodies = []
     for box in model.boxes:
         R_b, p_b = terms.R[box.body], terms.p[box.body]
-        # robot spheres on the box (gaps.sphere_box_gap), after a cheap bounding-sphere test
-        near = np.flatnonzero(np.linalg.norm(centers - p_b, axis=1) - sph.radius
-                              < margin + np.linalg.norm(box.half))
-        g, n, point_A, point_B = gapfn.sphere_box_gaps(centers[near], sph.radius[near], R_b, p_b, box.half)
-        k = g < margin
-        parts.append((ROBOT_BOX, sph.body[near[k]], np.full(k.sum(), box.body), near[k], g[k], n[k],
-                      point_A[k], point_B[k]))
+        # robot spheres on the box (gaps.sphere_box_gap), after a cheap test: the distance to
+        # the box is at least the largest excess of the centre over a half extent
+        c_b = (centers - p_b) @ R_b
+        near = np.flatnonzero(np.max(np.abs(c_b) - box.half, axis=1) - sph.radius < margin)
+        if len(near):
+            g_b, n_b, a_b, b_b = gapfn.sphere_box_gaps(centers[near], sph.radius[near], R_b, p_b, box.half)
+            k = g_b < margin
+            near, g_b, n_b, a_b, b_b = near[k], g_b[k], n_b[k], a_b[k], b_b[k]
+        else:
+            g_b, n_b, a_b, b_b = np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))
+        counts.append(len(near))
+        box_bodies.append(box.body)
+        body_A.append(sph.body[near]), feature.append(near), g.append(g_b), n.append(n_b)
+        point_A.append(a_b), point_B.append(b_b)
         # box corners on the ground: g = x_z (gaps.box_corner_plane_gaps)
         corners = p_b + (gapfn.CORNER_SIGNS * box.half) @ R_b.T  # gaps.box_corners, unchecked
         k = np.flatnonzero(corners[:, 2] < margin)
-        parts.append((BOX_GROUND, np.full(len(k), box.body), np.full(len(k), -1), k, corners[k, 2],
-                      np.tile(gapfn.e_z, (len(k), 1)), corners[k], corners[k] * [1.0, 1.0, 0.0]))
-    kind = np.concatenate([np.full(len(p[3]), p[0]) for p in parts]).astype(int)
-    body_A, body_B, feature = (np.concatenate([p[i] for p in parts]).astype(int) for i in (1, 2, 3))
-    g, n, point_A, point_B = (np.concatenate([p[i] for p in parts]) for i in (4, 5, 6, 7))
+        counts.append(len(k))
+        body_A.append(np.full(len(k), box.body)), feature.append(k), g.append(corners[k, 2])
+        n.append(np.broadcast_to(gapfn.e_z, (len(k), 3)))
+        point_A.append(corners[k]), point_B.append(corners[k] * [1.0, 1.0, 0.0])
+    kind = np.repeat([ROBOT_GROUND] + [ROBOT_BOX, BOX_GROUND] * len(model.boxes), counts)
+    body_B = np.repeat([-1] + [b for body in box_bodies for b in (body, -1)], counts)
+    body_A, feature = np.concatenate(body_A).astype(int), np.concatenate(feature).astype(int)
+    g, n, point_A, point_B = (np.concatenate(x) for x in (g, n, point_A, point_B))
     hints = np.full((len(g), 3), np.nan)
     if t_hint:
         for i, key in enumerate(zip(kind.tolist(), body_A.tolist(), feature.tolist())):
@@ -107,11 +119,10 @@ def contact_jacobian(chain: ChainModel, terms: ChainTerms, contacts: Contacts) -
     if on_body.any():
         J_rel[on_body] -= _point_jacobians(chain, terms, contacts.body_B[on_body], contacts.point_B[on_body])
     # rows n^T J, t1^T J, t2^T J of each contact
-    return np.einsum("kij,kin->kjn", contacts.frame, J_rel).reshape(3 * contacts.m, chain.model.nv)
+    return (contacts.frame.transpose(0, 2, 1) @ J_rel).reshape(3 * contacts.m, chain.model.nv)
 
 
 def _point_jacobians(chain: ChainModel, terms: ChainTerms, body: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """(k, 3, nv) world Jacobians of the body-fixed points at world positions x (k, 3)."""
-    S_ang, S_lin = terms.S[:3].T, terms.S[3:].T  # (nv, 3)
-    J = (S_lin[None] - cross_rows(x[:, None, :], S_ang[None])) * chain.moves[body][:, :, None]  # (k, nv, 3)
-    return J.transpose(0, 2, 1)
+    """(k, 3, nv) world Jacobians of the body-fixed points at world positions x (k, 3):
+    S_lin - [x]x S_ang on the dofs that move each body."""
+    return (terms.S[3:] - skew_rows(x) @ terms.S[:3]) * chain.moves[body][:, None, :]

@@ -26,7 +26,7 @@ import numpy as np
 
 from .model import Model, ModelError
 from .quaternion import quat_to_rot
-from .spatial import cross_rows, skew
+from .spatial import cross_rows, skew, skew_rows
 
 _AXIS = {"Rx": 0, "Ry": 1, "Rz": 2}
 
@@ -77,105 +77,115 @@ class ChainModel:
         rev_axis = np.array([_AXIS[model.joint_type[i]] for i in self.rev_body], dtype=int)
         self.rev_axis = rev_axis
         self.rev_j, self.rev_k = (rev_axis + 1) % 3, (rev_axis + 2) % 3
+        # free joints: (body, first q index, first dof); their S columns [0, R; 1, p x R] keep
+        # the identity block in a template
+        self.free = [(i, model.q_idx[i].start, model.v_idx[i].start)
+                     for i, jt in enumerate(model.joint_type) if jt == "free"]
+        self.free_dofs = np.array([k for _, _, v in self.free for k in range(v, v + 6)], dtype=int)
+        self.S_template = np.zeros((6, nv))
+        for _, _, v in self.free:
+            self.S_template[3:, v:v + 3] = np.eye(3)
+        self.upper_same_chain = self.upper & self.same_chain
+        # the chains' root bodies after the first (their sums restart there)
+        self.chain_starts = [i for i in range(1, nb) if model.parent[i] < 0]
+        self.tree_rot_cols = (self.tree_rot[self.rev_body, :, self.rev_j], self.tree_rot[self.rev_body, :, self.rev_k])
 
     def terms(self, q, qd) -> ChainTerms:
         """R, p, S, V, M and h at (q, qd): the same numbers as forward_kinematics, crba, bias_force."""
         R, p = self._poses(q)
         S, c_free = self._motion_subspace(R, p, qd)
         # V_i = cumulative sum of S_k qd_k within each chain, read at each body's last dof
-        Sqd = S * qd
-        V = self._chain_cumsum(Sqd.T)[self.last_dof]
+        Sqd = (S * qd).T
+        V = self._chain_cumsum(Sqd)[self.last_dof]
         # c_k = V_body(k) x S_k qd_k for revolute dofs (zero for their own body: use V of the body)
-        c = _motion_cross(V[self.dof_body], Sqd.T)
-        c[c_free[0]] = c_free[1]
+        c = _motion_cross(V[self.dof_body], Sqd)
+        c[self.free_dofs] = c_free
         A = self.a_0 + self._chain_cumsum(c)[self.last_dof]
         I_w = self._world_inertias(R, p)
-        IV = np.einsum("bij,bj->bi", I_w, V)
-        f = np.einsum("bij,bj->bi", I_w, A) + _force_cross(V, IV)
+        f = np.einsum("bij,bj->bi", I_w, A) + _force_cross(V, np.einsum("bij,bj->bi", I_w, V))
         F = self._subtree_sum(f)
-        h = np.einsum("ik,ki->i", S.T, F[self.dof_body].T)
+        h = np.einsum("ki,ki->i", S, F[self.dof_body].T)
         Ic = self._subtree_sum(I_w.reshape(len(I_w), 36)).reshape(-1, 6, 6)
         IcS = np.einsum("kij,jk->ik", Ic[self.dof_body], S)  # (6, nv): Ic_body(l) S_l
-        M = S.T @ IcS
-        M = np.where(self.upper & self.same_chain, M, 0.0)
-        M = M + np.triu(M, 1).T
+        # M[k, l] = S_k^T Ic_body(l) S_l for k <= l in one chain; the lower triangle by symmetry
+        M = np.where(self.upper_same_chain, S.T @ IcS, 0.0)
+        M = M + M.T
+        M.flat[::len(M) + 1] *= 0.5
         return ChainTerms(R, p, S, V, M, h)
 
     def _poses(self, q):
         """Body orientations and origins; joint rotations batched, the chain product in a loop."""
         model = self.model
-        R = np.empty((model.nb, 3, 3))
-        p = np.empty((model.nb, 3))
         theta = q[self.rev_q]
-        c, s = np.cos(theta), np.sin(theta)
+        c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
         # R_rel = R_tree Rot_axis(theta): rotate columns j, k of R_tree in their plane
         R_rel = self.tree_rot[self.rev_body].copy()
-        cols_j = self.tree_rot[self.rev_body, :, self.rev_j]
-        cols_k = self.tree_rot[self.rev_body, :, self.rev_k]
+        cols_j, cols_k = self.tree_rot_cols
         rows = np.arange(len(theta))
-        R_rel[rows, :, self.rev_j] = c[:, None] * cols_j + s[:, None] * cols_k
-        R_rel[rows, :, self.rev_k] = -s[:, None] * cols_j + c[:, None] * cols_k
-        n = 0
+        R_rel[rows, :, self.rev_j] = c * cols_j + s * cols_k
+        R_rel[rows, :, self.rev_k] = c * cols_k - s * cols_j
+        R, n = [None] * model.nb, 0
         for i, jt in enumerate(model.joint_type):
             if jt == "free":
-                q_i = q[model.q_idx[i]]
-                R[i] = quat_to_rot(q_i[3:])
-                p[i] = q_i[:3]
+                start = model.q_idx[i].start
+                R[i] = quat_to_rot(q[start + 3:start + 7])
             else:
-                p[i] = p[i - 1] + R[i - 1] @ self.tree_pos[i]
                 R[i] = R[i - 1] @ R_rel[n]
                 n += 1
+        R = np.array(R)
+        # p_i = p_parent + R_parent tree_pos_i: a cumulative sum along each chain from its root
+        # (free joint) position; the free joints' rows of tree_pos are replaced by those positions
+        steps = np.einsum("bij,bj->bi", R[self.rev_body - 1], self.tree_pos[self.rev_body])
+        d = np.empty((model.nb, 3))
+        d[self.rev_body] = steps
+        for i, start, _ in self.free:
+            d[i] = q[start:start + 3]
+        p = np.cumsum(d, axis=0)
+        for i in self.chain_starts:
+            p[i:] -= p[i - 1]
         return R, p
 
     def _motion_subspace(self, R, p, qd):
-        """World motion subspace S (6, nv) and the free joints' velocity-product terms."""
-        model = self.model
-        S = np.zeros((6, model.nv))
+        """World motion subspace S (6, nv) and the free joints' velocity-product terms (6k, 6)."""
+        S = self.S_template.copy()
         axes = R[self.rev_body, :, self.rev_axis]
         S[:3, self.rev_v] = axes.T
         S[3:, self.rev_v] = cross_rows(p[self.rev_body], axes).T
-        free_dofs, free_c = [], []
-        for i, jt in enumerate(model.joint_type):
-            if jt != "free":
-                continue
-            iv = model.v_idx[i]
-            v_w, w_b = qd[iv][:3], qd[iv][3:]
-            S[3:, iv.start:iv.start + 3] = np.eye(3)
-            S[:3, iv.start + 3:iv.stop] = R[i]
-            S[3:, iv.start + 3:iv.stop] = skew(p[i]) @ R[i]
+        c = np.zeros((6 * len(self.free), 6))
+        for n, (i, _, v) in enumerate(self.free):
+            S[:3, v + 3:v + 6] = R[i]
+            S[3:, v + 3:v + 6] = skew(p[i]) @ R[i]
             # the free joint's velocity-product term in world coordinates: [0; -w_world x v_world]
-            free_dofs.extend(range(iv.start, iv.stop))
-            c = np.zeros((6, 6))
-            c[5, 3:] = -cross_rows(R[i] @ w_b, v_w)
-            free_c.append(c)
-        return S, (np.array(free_dofs, dtype=int), np.concatenate(free_c))
+            w, u = R[i] @ qd[v + 3:v + 6], qd[v:v + 3]
+            c[6 * n + 5, 3:] = (w[2] * u[1] - w[1] * u[2], w[0] * u[2] - w[2] * u[0], w[1] * u[0] - w[0] * u[1])
+        return S, c
 
     def _chain_cumsum(self, x):
         """Cumulative sum over dofs (rows of x), restarting at each chain's first dof."""
         out = np.cumsum(x, axis=0)
-        for i in range(self.model.nb):
-            if self.model.parent[i] < 0 and self.model.v_idx[i].start > 0:
-                start = self.model.v_idx[i].start
-                out[start:] -= out[start - 1]
+        for i in self.chain_starts:
+            start = self.model.v_idx[i].start
+            out[start:] -= out[start - 1]
         return out
 
     def _subtree_sum(self, x):
         """Sum over each body's descendants (rows = bodies), chains in reverse order."""
         out = np.cumsum(x[::-1], axis=0)[::-1].copy()
-        for i in range(self.model.nb):
-            if self.model.parent[i] < 0 and i > 0:
-                out[:i] -= out[i]
+        for i in self.chain_starts:
+            out[:i] -= out[i]
         return out
 
     def _world_inertias(self, R, p):
+        """Spatial inertias in world coordinates at the origin: [[Ic + m C C^T, m C], [m C^T, m 1]]."""
         c = p + np.einsum("bij,bj->bi", R, self.com)
-        Ic = np.einsum("bij,bjk,blk->bil", R, self.I_com, R)
-        C = _skew_batch(c)
+        Ic = R @ self.I_com @ R.transpose(0, 2, 1)
+        C = skew_rows(c)
         m = self.mass[:, None, None]
-        I_w = np.zeros((len(R), 6, 6))
-        I_w[:, :3, :3] = Ic + m * C @ C.transpose(0, 2, 1)
-        I_w[:, :3, 3:] = m * C
-        I_w[:, 3:, :3] = m * C.transpose(0, 2, 1)
+        mC = m * C
+        I_w = np.empty((len(R), 6, 6))
+        I_w[:, :3, :3] = Ic + mC @ C.transpose(0, 2, 1)
+        I_w[:, :3, 3:] = mC
+        I_w[:, 3:, :3] = mC.transpose(0, 2, 1)
         I_w[:, 3:, 3:] = m * np.eye(3)
         return I_w
 
@@ -189,14 +199,6 @@ class ChainModel:
         J = np.zeros((3, self.model.nv))
         J[:, start:stop] = terms.S[3:, start:stop] - skew(x) @ terms.S[:3, start:stop]
         return J
-
-
-def _skew_batch(w):
-    out = np.zeros((len(w), 3, 3))
-    out[:, 0, 1], out[:, 0, 2] = -w[:, 2], w[:, 1]
-    out[:, 1, 0], out[:, 1, 2] = w[:, 2], -w[:, 0]
-    out[:, 2, 0], out[:, 2, 1] = -w[:, 1], w[:, 0]
-    return out
 
 
 def _motion_cross(v, m):

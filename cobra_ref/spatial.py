@@ -34,6 +34,18 @@ def skew(w: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
+def skew_rows(w: np.ndarray) -> np.ndarray:
+    """(k, 3, 3) skew matrices [w_i]x of the rows of w (k, 3): skew_rows(w)[i] @ v = w_i x v.
+
+    Helper: the batched :func:`skew` of the world-frame fast paths.
+    """
+    out = np.zeros((len(w), 3, 3))
+    out[:, 0, 1], out[:, 0, 2] = -w[:, 2], w[:, 1]
+    out[:, 1, 0], out[:, 1, 2] = w[:, 2], -w[:, 0]
+    out[:, 2, 0], out[:, 2, 1] = -w[:, 1], w[:, 0]
+    return out
+
+
 def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise cross product a x b of (..., 3) arrays, broadcasting like numpy.
 
