@@ -60,6 +60,7 @@ from typing import NamedTuple
 import numpy as np
 import osqp
 from scipy import sparse
+from scipy.linalg import get_lapack_funcs
 
 from .active_set import box_form, certified_solve, held_variables
 
@@ -369,7 +370,13 @@ def coulomb_fixed_point(P: np.ndarray, c: np.ndarray, mu: np.ndarray, at_lo: np.
     K[held, held] = 1.0
     tangential = held[held % 3 != 0]
     K[tangential, tangential - tangential % 3] = np.where(at_hi[tangential], -1.0, 1.0) * mu[tangential // 3]
-    return np.linalg.solve(K, rhs)
+    _, _, p, info = _gesv(K, rhs)  # LAPACK's LU solve
+    if info != 0:
+        raise np.linalg.LinAlgError(f"the fixed-point system is singular (info {info})")
+    return p
+
+
+_gesv = get_lapack_funcs("gesv", (np.zeros(1),))
 
 
 def kkt_residuals(G: np.ndarray, c: np.ndarray, p: np.ndarray, mu, D: np.ndarray):
@@ -380,18 +387,18 @@ def kkt_residuals(G: np.ndarray, c: np.ndarray, p: np.ndarray, mu, D: np.ndarray
     w = G p + c. Returns (max |p_N w_N|, relative cone violation, max |w_T| among contacts
     whose tangential impulse is strictly inside the pyramid). ``mu``: scalar or one per contact.
     """
-    w = G @ p + c
-    p_N, w_N = p[0::3], w[0::3]
-    mu = np.broadcast_to(np.asarray(mu, dtype=float), p_N.shape)
-    p_T = np.stack([p[1::3], p[2::3]], axis=1)
-    w_T = np.stack([w[1::3], w[2::3]], axis=1)
-    comp = float(np.max(np.abs(p_N * w_N))) if len(p_N) else 0.0
-    facet = np.abs(p_T @ D.T)  # (m, K/2)
-    scale = max(float(p_N.max()), 1e-12) if len(p_N) else 1.0
-    bound = (mu * p_N)[:, None]
-    cone = float(max(0.0, np.max(facet - bound)) / scale) if len(p_N) else 0.0
-    inside = np.all(facet < bound * (1 - 1e-6), axis=1) & (p_N > 1e-9 * scale)
-    stick = float(np.max(np.linalg.norm(w_T[inside], axis=1))) if inside.any() else 0.0
+    if len(p) == 0:
+        return 0.0, 0.0, 0.0
+    p3, w3 = p.reshape(-1, 3), (G @ p + c).reshape(-1, 3)
+    p_N = p3[:, 0]
+    comp = float(np.abs(p_N * w3[:, 0]).max())
+    facet = np.abs(p3[:, 1:] @ D.T)  # (m, K/2)
+    scale = max(float(p_N.max()), 1e-12)
+    bound = (np.asarray(mu, dtype=float) * p_N)[:, None]
+    cone = max(0.0, float((facet - bound).max())) / scale
+    inside = (facet < bound * (1 - 1e-6)).all(axis=1) & (p_N > 1e-9 * scale)
+    w_T = w3[inside, 1:]
+    stick = float(np.sqrt((w_T * w_T).sum(axis=1).max())) if len(w_T) else 0.0
     return comp, cone, stick
 
 
