@@ -147,17 +147,25 @@ class ContactQP:
     previous iterate's active set and accepted only with a KKT certificate at OSQP's own
     tolerances (:mod:`cobra_ref.active_set`), else OSQP solves it. Both return the same QP
     minimisers to those tolerances (tests/test_contact_qp.py).
+
+    ``osqp``: ``"every-step"`` (default, the design: OSQP solves every step's contact problem)
+    or ``"fallback"`` (with the active-set path: the first iterate, too, is tried on the
+    previous step's active set first, so OSQP runs only when no certified answer is found;
+    the fastest, and as accurate, but most steps then never call OSQP).
     """
 
     def __init__(self, mu: float, n_facets: int = 4, reg: float = 1e-6, eps: float = 1e-7,
                  friction: str = "fixed-point", fp_tol: float = 1e-8, fp_max: int = 50,
-                 max_iter: int = 20000, fp_path: str = "active-set"):
+                 max_iter: int = 20000, fp_path: str = "active-set", osqp: str = "every-step"):
         if not (np.isfinite(mu) and mu >= 0):
             raise ValueError(f"mu must be finite and >= 0, got {mu}")
         if friction not in ("convex", "fixed-point"):
             raise ValueError(f"friction must be 'convex' or 'fixed-point', got {friction!r}")
         if fp_path not in ("active-set", "osqp"):
             raise ValueError(f"fp_path must be 'active-set' or 'osqp', got {fp_path!r}")
+        if osqp not in ("every-step", "fallback"):
+            raise ValueError(f"osqp must be 'every-step' or 'fallback', got {osqp!r}")
+        self.osqp_every_step = osqp == "every-step" or fp_path == "osqp"
         self.mu, self.D, self.reg, self.friction = mu, facet_directions(n_facets), reg, friction
         self.eps, self.fp_tol, self.fp_max, self.max_iter = eps, fp_tol, fp_max, max_iter
         self.fp_path = fp_path
@@ -238,9 +246,6 @@ class ContactQP:
                 self._solvers.clear()
             self._solvers[key] = solver
             self._upper[m] = _upper_pattern(3 * m)
-            if convex is None:
-                self._A_dense[m] = A.toarray()
-                self._box[m] = box_form(self._A_dense[m])
         else:
             rows, cols = self._upper[m]
             self._solvers[key].update(Px=P[rows, cols], q=c)
@@ -274,10 +279,10 @@ class ContactQP:
         Returns (p, ADMM iterations, iterates, OSQP solves, converged, inaccurate)."""
         m = len(c) // 3
         fast = self.fp_path == "active-set"
-        # the tight (reference) solver is set up or updated only when it is needed
+        # the OSQP solvers are set up or updated only when they are needed
         solver = None if fast else self._solver(m, P, c)
-        loose = self._solver(m, P, c, loose=True) if fast else None
-        A, box = self._A_dense[m], self._box[m]
+        loose = self._solver(m, P, c, loose=True) if fast and self.osqp_every_step else None
+        A, box = self._dense_constraints(m)
         pbar_N = np.maximum(p[0::3], 0.0)
         total, solves, inaccurate, damped, last_change = 0, 0, False, False, np.inf
         best = (np.inf, p)  # the iterate closest to a fixed point: what is kept if none is reached
@@ -286,8 +291,10 @@ class ContactQP:
             bound = np.repeat(mu * pbar_N, len(self.D))
             l = np.concatenate([np.zeros(m), -bound])
             u = np.concatenate([np.full(m, np.inf), bound])
-            certified = self._certify(P, c, A, l, u, p, y) if fast and fp > 1 else None
+            # the first iterate goes to OSQP unless osqp="fallback" (class docstring)
+            certified = self._certify(P, c, A, l, u, p, y) if fast and (fp > 1 or not self.osqp_every_step) else None
             if fast and certified is None:
+                loose = loose or self._solver(m, P, c, loose=True)
                 loose.warm_start(x=p, y=y)
                 loose.update(l=l, u=u)
                 res = loose.solve(raise_error=False)
@@ -323,6 +330,13 @@ class ContactQP:
                 pbar_N, last_update = (0.5 * (pbar_N + p_N) if damped else p_N), "plain"
             last_change = change
         return best[1], total, self.fp_max, solves, False, inaccurate
+
+    def _dense_constraints(self, m):
+        """The fixed-point form's constraint matrix (dense) and its active_set.BoxForm (or None)."""
+        if m not in self._A_dense:
+            self._A_dense[m] = _constraint_matrix(m, self.D).toarray()
+            self._box[m] = box_form(self._A_dense[m])
+        return self._A_dense[m], self._box[m]
 
     def _certify(self, P, c, A, l, u, x, y):
         """(x, y) re-solved on the active set that (x, y) points at, if certified, else None."""

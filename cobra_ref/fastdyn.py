@@ -40,6 +40,7 @@ class ChainTerms(NamedTuple):
     V: np.ndarray  # (nb, 6) body spatial velocities, world coordinates at the world origin
     M: np.ndarray  # (nv, nv) joint-space inertia
     h: np.ndarray  # (nv,) bias force C qd + g
+    com: np.ndarray  # (nb, 3) body centres of mass, world
 
 
 class ChainModel:
@@ -101,7 +102,8 @@ class ChainModel:
         c = _motion_cross(V[self.dof_body], Sqd)
         c[self.free_dofs] = c_free
         A = self.a_0 + self._chain_cumsum(c)[self.last_dof]
-        I_w = self._world_inertias(R, p)
+        com = p + np.einsum("bij,bj->bi", R, self.com)
+        I_w = self._world_inertias(R, com)
         f = np.einsum("bij,bj->bi", I_w, A) + _force_cross(V, np.einsum("bij,bj->bi", I_w, V))
         F = self._subtree_sum(f)
         h = np.einsum("ki,ki->i", S, F[self.dof_body].T)
@@ -111,7 +113,7 @@ class ChainModel:
         M = np.where(self.upper_same_chain, S.T @ IcS, 0.0)
         M = M + M.T
         M.flat[::len(M) + 1] *= 0.5
-        return ChainTerms(R, p, S, V, M, h)
+        return ChainTerms(R, p, S, V, M, h, com)
 
     def _poses(self, q):
         """Body orientations and origins; joint rotations batched, the chain product in a loop."""
@@ -175,9 +177,9 @@ class ChainModel:
             out[:i] -= out[i]
         return out
 
-    def _world_inertias(self, R, p):
-        """Spatial inertias in world coordinates at the origin: [[Ic + m C C^T, m C], [m C^T, m 1]]."""
-        c = p + np.einsum("bij,bj->bi", R, self.com)
+    def _world_inertias(self, R, c):
+        """Spatial inertias in world coordinates at the origin, [[Ic + m C C^T, m C], [m C^T, m 1]]
+        with C = [c]x for the world centres of mass c (nb, 3)."""
         Ic = R @ self.I_com @ R.transpose(0, 2, 1)
         C = skew_rows(c)
         m = self.mass[:, None, None]
@@ -202,12 +204,18 @@ class ChainModel:
 
 
 def _motion_cross(v, m):
-    """Row-wise v x m for motion vectors ([RBDA] eq. 2.31), arrays (n, 6)."""
+    """Row-wise v x m for motion vectors ([RBDA] eq. 2.31), arrays (n, 6):
+    [w x m_ang ; w x m_lin + v_O x m_ang], the three products in one batched call."""
+    n = len(v)
     w, vo = v[:, :3], v[:, 3:]
-    return np.concatenate([cross_rows(w, m[:, :3]), cross_rows(w, m[:, 3:]) + cross_rows(vo, m[:, :3])], axis=1)
+    x = cross_rows(np.concatenate([w, w, vo]), np.concatenate([m[:, :3], m[:, 3:], m[:, :3]]))
+    return np.concatenate([x[:n], x[n:2 * n] + x[2 * n:]], axis=1)
 
 
 def _force_cross(v, f):
-    """Row-wise v x* f for force vectors ([RBDA] eq. 2.32), arrays (n, 6)."""
+    """Row-wise v x* f for force vectors ([RBDA] eq. 2.32), arrays (n, 6):
+    [w x f_ang + v_O x f_lin ; w x f_lin], the three products in one batched call."""
+    n = len(v)
     w, vo = v[:, :3], v[:, 3:]
-    return np.concatenate([cross_rows(w, f[:, :3]) + cross_rows(vo, f[:, 3:]), cross_rows(w, f[:, 3:])], axis=1)
+    x = cross_rows(np.concatenate([w, vo, w]), np.concatenate([f[:, :3], f[:, 3:], f[:, 3:]]))
+    return np.concatenate([x[:n] + x[n:2 * n], x[2 * n:]], axis=1)

@@ -3,7 +3,7 @@
 Implements: [COBRA] eq. (1) discretized over dt, with the contact impulses of eq. (5)-(6)::
 
     M (u+ - u) = dt (tau - h) + J_c^T p                     # eq. (1), impulses p = f dt
-    q+ = q (+) dt u+                                         # integrate(): semi-implicit Euler
+    q+ = q (+) dt u+                                         # kinematics.integrate: semi-implicit Euler
 
 Contacts are persistent and there is no restitution: the QP asks the gap after the step to
 stay >= 0, g + dt g'+ >= 0, with a penetration g < 0 removed at the rate beta g / dt.
@@ -32,7 +32,7 @@ from scipy.linalg import get_lapack_funcs
 from .contact import ROBOT_BOX, Contacts, contact_jacobian, find_contacts
 from .contact_qp import ContactQP, QPInfo
 from .fastdyn import ChainModel
-from .kinematics import integrate
+from .quaternion import quat_exp, quat_mul
 from .model import Model
 
 
@@ -61,6 +61,7 @@ class StepSettings:
     reg: float = 1e-6
     fp_max: int = 10  # friction fixed-point iterates per step (warm-started; contact_qp docstring)
     fp_path: str = "active-set"  # or "osqp": OSQP for every iterate, the reference (contact_qp.ContactQP)
+    osqp: str = "every-step"  # or "fallback": OSQP only where no certified answer is found (contact_qp.ContactQP)
     margin: float = 0.01  # candidate contacts within 10 mm
     beta: float = 0.2  # fraction of a penetration removed per step
     max_start_penetration: float = 0.005
@@ -93,7 +94,7 @@ class Stepper:
         self.model, self.s = model, settings
         self.chain = ChainModel(model)
         self.qp = ContactQP(model.mu, settings.n_facets, settings.reg, friction=settings.friction,
-                            fp_max=settings.fp_max, fp_path=settings.fp_path)
+                            fp_max=settings.fp_max, fp_path=settings.fp_path, osqp=settings.osqp)
         # actuated = revolute joints (one dof each); a model may have none (a lone ball or box)
         revolute = [i for i, jt in enumerate(model.joint_type) if jt != "free"]
         self.act = np.array([model.v_idx[i].start for i in revolute], dtype=int)
@@ -161,7 +162,7 @@ class Stepper:
         work_contacts = float(p @ (J @ u_mid))
         kinetic = 0.5 * qd @ M @ qd
         potential = self._potential(terms)
-        q_next = integrate(model, q, qd_next, dt, check=False)
+        q_next = self._integrate(q, qd_next)
         clock.append(time.perf_counter())
         for phase, t0, t1 in zip(PHASES, clock[:-1], clock[1:]):
             self.timing[phase] += t1 - t0
@@ -195,8 +196,19 @@ class Stepper:
         self._hint = {keys[i]: w_T[i] for i in sliding.tolist()}
 
     def _potential(self, terms) -> float:
-        com_w = terms.p + np.einsum("bij,bj->bi", terms.R, self.chain.com)
-        return float(-np.sum(self.chain.mass * (com_w @ self.model.gravity)))
+        return float(-self.chain.mass @ (terms.com @ self.model.gravity))
+
+    def _integrate(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """q (+) dt u: :func:`cobra_ref.kinematics.integrate` (the reference, equal to 1e-15 in
+        tests/test_stepper_physics.py) with the revolute joints in one vector operation."""
+        dt, chain = self.s.dt, self.chain
+        q_next = q.copy()
+        q_next[chain.rev_q] += dt * u[chain.rev_v]
+        for _, iq, iv in chain.free:
+            q_next[iq:iq + 3] += dt * u[iv:iv + 3]
+            quat = quat_mul(q[iq + 3:iq + 7], quat_exp(dt * u[iv + 3:iv + 6]))
+            q_next[iq + 3:iq + 7] = quat / np.linalg.norm(quat)
+        return q_next
 
     def reset(self):
         self._warm, self._hint = {}, {}

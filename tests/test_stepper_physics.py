@@ -299,6 +299,22 @@ def _single_body_ball():
     )
 
 
+def test_the_steppers_integration_equals_kinematics_integrate(rng):
+    """Stepper._integrate (revolute joints in one vector operation) against the reference
+    kinematics.integrate on COBRA with the box: random unit-quaternion states and velocities."""
+    from cobra_ref.kinematics import integrate
+    from cobra_ref.robots import cobra_model
+
+    model = cobra_model()
+    stepper = Stepper(model)
+    for _ in range(5):
+        q = rng.normal(size=model.nq)
+        for s in (model.q_idx[0], model.q_idx[model.boxes[0].body]):
+            q[s.start + 3:s.stop] /= np.linalg.norm(q[s.start + 3:s.stop])
+        u = rng.normal(size=model.nv)
+        np.testing.assert_allclose(stepper._integrate(q, u), integrate(model, q, u, stepper.s.dt), atol=1e-15)
+
+
 def test_stepper_steps_a_ball_that_has_no_revolute_joint():
     """The smallest model, one free body, should step like the locked one: p_N = m g dt."""
     model = _single_body_ball()
