@@ -66,7 +66,7 @@ def find_contacts(model, terms: ChainTerms, margin: float, t_hint: dict | None =
     s = np.flatnonzero(centers[:, 2] - sph.radius < margin)
     counts = [len(s)]
     body_A, feature, g = [sph.body[s]], [s], [centers[s, 2] - sph.radius[s]]
-    n = [np.broadcast_to(gapfn.e_z, (len(s), 3))]
+    n = [_e_z_rows(len(s))]
     point_A, point_B = [centers[s] - sph.radius[s, None] * gapfn.e_z], [centers[s] * [1.0, 1.0, 0.0]]
     box_bodies = []
     for box in model.boxes:
@@ -90,7 +90,7 @@ def find_contacts(model, terms: ChainTerms, margin: float, t_hint: dict | None =
         k = np.flatnonzero(corners[:, 2] < margin)
         counts.append(len(k))
         body_A.append(np.full(len(k), box.body)), feature.append(k), g.append(corners[k, 2])
-        n.append(np.broadcast_to(gapfn.e_z, (len(k), 3)))
+        n.append(_e_z_rows(len(k)))
         point_A.append(corners[k]), point_B.append(corners[k] * [1.0, 1.0, 0.0])
     kind = np.repeat([ROBOT_GROUND] + [ROBOT_BOX, BOX_GROUND] * len(model.boxes), counts)
     body_B = np.repeat([-1] + [b for body in box_bodies for b in (body, -1)], counts)
@@ -103,6 +103,14 @@ def find_contacts(model, terms: ChainTerms, margin: float, t_hint: dict | None =
                 hints[i] = t_hint[key]
     return Contacts(kind, body_A, body_B, feature, g.astype(float), gapfn.contact_frames(n, hints),
                     point_A, point_B)
+
+
+_E_Z_ROWS = np.tile(gapfn.e_z, (64, 1))
+
+
+def _e_z_rows(k: int) -> np.ndarray:
+    """k rows of the ground normal e_z (a view of a constant for k <= 64: read, never written)."""
+    return _E_Z_ROWS[:k] if k <= len(_E_Z_ROWS) else np.tile(gapfn.e_z, (k, 1))
 
 
 def contact_jacobian(chain: ChainModel, terms: ChainTerms, contacts: Contacts) -> np.ndarray:

@@ -284,13 +284,17 @@ class ContactQP:
         loose = self._solver(m, P, c, loose=True) if fast and self.osqp_every_step else None
         A, box = self._dense_constraints(m)
         pbar_N = np.maximum(p[0::3], 0.0)
+        if box is not None and pbar_N.any():
+            # the first guess: the fixed point on the active set of the warm start (the previous
+            # step's), so that an unchanged active set converges at the first iterate
+            held = held_variables(box, p, y, *self._bounds(pbar_N, mu))
+            pbar_N = _newton_update(P, c, mu, *held)
+            pbar_N = np.maximum(p[0::3], 0.0) if pbar_N is None else pbar_N
         total, solves, inaccurate, damped, last_change = 0, 0, False, False, np.inf
         best = (np.inf, p)  # the iterate closest to a fixed point: what is kept if none is reached
         last_update = "none"
         for fp in range(1, self.fp_max + 1):
-            bound = np.repeat(mu * pbar_N, len(self.D))
-            l = np.concatenate([np.zeros(m), -bound])
-            u = np.concatenate([np.full(m, np.inf), bound])
+            l, u = self._bounds(pbar_N, mu)
             # the first iterate goes to OSQP unless osqp="fallback" (class docstring)
             certified = self._certify(P, c, A, l, u, p, y) if fast and (fp > 1 or not self.osqp_every_step) else None
             if fast and certified is None:
@@ -330,6 +334,12 @@ class ContactQP:
                 pbar_N, last_update = (0.5 * (pbar_N + p_N) if damped else p_N), "plain"
             last_change = change
         return best[1], total, self.fp_max, solves, False, inaccurate
+
+    def _bounds(self, pbar_N, mu):
+        """OSQP's l and u of the fixed-point form: p_N >= 0, |d_k . p_T| <= mu pbar_N."""
+        m = len(pbar_N)
+        bound = np.repeat(mu * pbar_N, len(self.D))
+        return np.concatenate([np.zeros(m), -bound]), np.concatenate([np.full(m, np.inf), bound])
 
     def _dense_constraints(self, m):
         """The fixed-point form's constraint matrix (dense) and its active_set.BoxForm (or None)."""

@@ -188,11 +188,12 @@ def contact_frames(n: np.ndarray, t_hint: np.ndarray) -> np.ndarray:
     """
     a = np.where(np.abs(n[:, :1]) > 0.9, e_y, e_x)  # default tangent seed
     hint = np.where(np.isnan(t_hint), 0.0, t_hint)
-    t_perp = hint - np.sum(hint * n, axis=1, keepdims=True) * n
-    use_hint = np.linalg.norm(t_perp, axis=1) > 1e-9 * np.linalg.norm(hint, axis=1)
-    seed = a - np.sum(a * n, axis=1, keepdims=True) * n
+    t_perp = hint - (hint * n).sum(axis=1)[:, None] * n
+    # |t_perp| > 1e-9 |t_hint|, squared
+    use_hint = (t_perp * t_perp).sum(axis=1) > 1e-18 * (hint * hint).sum(axis=1)
+    seed = a - (a * n).sum(axis=1)[:, None] * n
     t1 = np.where(use_hint[:, None], t_perp, seed)
-    t1 = t1 / np.linalg.norm(t1, axis=1, keepdims=True)
+    t1 /= np.sqrt((t1 * t1).sum(axis=1))[:, None]
     frames = np.empty((len(n), 3, 3))
     frames[:, :, 0], frames[:, :, 1], frames[:, :, 2] = n, t1, cross_rows(n, t1)
     return frames

@@ -32,8 +32,8 @@ def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
     Helper: the Hamilton product (w-first).
     """
-    aw, ax, ay, az = (float(v) for v in a)
-    bw, bx, by, bz = (float(v) for v in b)
+    aw, ax, ay, az = np.asarray(a, dtype=float).tolist()
+    bw, bx, by, bz = np.asarray(b, dtype=float).tolist()
     # (aw bw - a.b,  aw b + bw a + a x b)
     return np.array([aw * bw - (ax * bx + ay * by + az * bz),
                      aw * bx + bw * ax + (ay * bz - az * by),
@@ -46,7 +46,7 @@ def quat_exp(rotvec: np.ndarray) -> np.ndarray:
 
     Helper: exp(rotvec / 2) as a unit quaternion, as in MuJoCo's ``mju_quatIntegrate``.
     """
-    x, y, z = (float(v) for v in rotvec)
+    x, y, z = np.asarray(rotvec, dtype=float).tolist()
     angle = math.sqrt(x * x + y * y + z * z)
     if angle < 1e-12:
         # second-order Taylor expansion of (cos(a/2), sin(a/2)/a * rotvec)

@@ -25,6 +25,7 @@ Logged per step (arrays of length N+1 for states, N for steps):
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
 from dataclasses import asdict, dataclass, field
@@ -202,7 +203,7 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
             what = "contact solve failed" if isinstance(exc, ContactSolveError) else "step failed"
             raise SimulationError(f"{what} at step {k}, t = {t:.4f} s: {exc}", traj) from exc
         q, qd = res.q, res.qd
-        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        if not math.isfinite(q.sum() + qd.sum()):  # a NaN or inf anywhere makes the sum non-finite
             traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): non-finite state",
                               meta(stepper))
             raise SimulationError(f"non-finite state at step {k}, t = {t:.4f} s", traj)
@@ -258,8 +259,11 @@ class _Log:
         s["stick_residual"][k], s["cond_G"][k] = info.stick_slip_residual, info.cond_G
         s["max_penetration"][k] = max(0.0, -float(cs.g.min())) if cs.m else 0.0
         s["n_contacts"][k] = cs.m
-        s["tau_excess"][k] = float(np.max(np.abs(res.tau) - stepper.tau_max, initial=-np.inf))
-        s["q_excess"][k] = float(np.max(np.abs(res.q[stepper.act_q]) - stepper.q_max, initial=-np.inf))
+        if len(stepper.act):
+            s["tau_excess"][k] = float((np.abs(res.tau) - stepper.tau_max).max())
+            s["q_excess"][k] = float((np.abs(res.q[stepper.act_q]) - stepper.q_max).max())
+        else:
+            s["tau_excess"][k] = s["q_excess"][k] = -np.inf
         s["kinetic"][k], s["potential"][k] = res.kinetic, res.potential
         s["work_actuators"][k], s["work_contacts"][k] = res.work_actuators, res.work_contacts
         self.tau[k] = res.tau
@@ -272,7 +276,7 @@ class _Log:
             rows["contact_point"].append(0.5 * (cs.point_A[active] + cs.point_B[active]))
             rows["contact_normal"].append(cs.frame[active, :, 0])
             p3 = res.p.reshape(-1, 3)[active]
-            rows["contact_force"].append(np.einsum("kij,kj->ki", cs.frame[active], p3) / self.dt)
+            rows["contact_force"].append((cs.frame[active] @ p3[:, :, None])[:, :, 0] / self.dt)
         self.n = k + 1
 
     def finish(self, wall_time: float, error: str = "", meta: dict | None = None) -> "Trajectory":

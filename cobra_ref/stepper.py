@@ -104,7 +104,7 @@ class Stepper:
         prescribed = settings.servo == "prescribed"
         self.free = np.setdiff1d(np.arange(model.nv), self.act) if prescribed else np.arange(model.nv)
         self.prescribed = np.setdiff1d(np.arange(model.nv), self.free)
-        self._warm: dict = {}
+        self._warm: tuple = ({}, None)  # (contact key -> row, rows of [p, duals] + a zero row)
         self._hint: dict = {}
         self.timing = dict.fromkeys(PHASES, 0.0)  # seconds spent in each phase, summed over steps
 
@@ -175,25 +175,28 @@ class Stepper:
 
     def _warm_start(self, keys):
         """This step's starting impulses and OSQP duals: the previous step's, contact by contact
-        (zero for a new contact). Each remembered row is [p_N, p_t1, p_t2, duals...]."""
+        (zero for a new contact). Remembered rows are [p_N, p_t1, p_t2, duals...], and the
+        last remembered row is all zeros (the start of a new contact)."""
         if not keys:
             return None, None
-        k_y = 1 + len(self.qp.D) * (1 if self.s.friction == "fixed-point" else 2)
-        zero = np.zeros(3 + k_y)
-        rows = np.array([self._warm.get(k, zero) for k in keys])
-        return rows[:, :3].ravel(), self.qp.duals_stacked(rows[:, 3:])
+        index, rows = self._warm
+        if rows is None:
+            k_y = 1 + len(self.qp.D) * (1 if self.s.friction == "fixed-point" else 2)
+            rows = np.zeros((1, 3 + k_y))
+        picked = rows[[index.get(k, -1) for k in keys]]
+        return picked[:, :3].ravel(), self.qp.duals_stacked(picked[:, 3:])
 
     def _remember(self, keys, p, w, contacts):
         """Warm starts and the sliding directions for the next step's contact frames."""
         if not keys:
-            self._warm, self._hint = {}, {}
+            self._warm, self._hint = ({}, None), {}
             return
         rows = np.concatenate([p.reshape(-1, 3), self.qp.duals_per_contact(self.qp.y, len(keys))], axis=1)
-        self._warm = dict(zip(keys, rows))
+        self._warm = (dict(zip(keys, range(len(keys)))), np.concatenate([rows, np.zeros((1, rows.shape[1]))]))
         # sliding velocity w_T = t1 w_t1 + t2 w_t2 (world) of the contacts that slip faster than 1 mm/s
-        w_T = np.einsum("kij,kj->ki", contacts.frame[:, :, 1:], w.reshape(-1, 3)[:, 1:])
-        sliding = np.flatnonzero(np.einsum("ki,ki->k", w_T, w_T) > 1e-12)
-        self._hint = {keys[i]: w_T[i] for i in sliding.tolist()}
+        w_T = contacts.frame[:, :, 1:] @ w.reshape(-1, 3)[:, 1:, None]
+        sliding = np.flatnonzero((w_T * w_T).sum(axis=(1, 2)) > 1e-12)
+        self._hint = {keys[i]: w_T[i, :, 0] for i in sliding.tolist()}
 
     def _potential(self, terms) -> float:
         return float(-self.chain.mass @ (terms.com @ self.model.gravity))
@@ -211,7 +214,7 @@ class Stepper:
         return q_next
 
     def reset(self):
-        self._warm, self._hint = {}, {}
+        self._warm, self._hint = ({}, None), {}
         self.timing = dict.fromkeys(PHASES, 0.0)
 
 
