@@ -105,7 +105,7 @@ def cmd_simulate(args) -> int:
     _check_writable(args.out)
     try:
         reference = load_reference(args.reference) if args.reference else builtin_reference(args.gait)
-        settings = StepSettings(dt=args.dt, servo=args.servo)
+        settings = StepSettings(dt=args.dt, servo=args.servo, osqp=args.osqp)
     except (ReferenceError, ValueError) as exc:
         raise SystemExit(f"error: {exc}") from None
     params = CobraParameters()
@@ -229,6 +229,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dt", type=_finite_float, default=1e-3, help="time step [s] (default 1e-3)")
     p.add_argument("--servo", choices=("prescribed", "pd"), default="prescribed",
                    help="joint servo (default prescribed: the joints follow the reference exactly)")
+    p.add_argument("--osqp", choices=("every-step", "fallback"), default="every-step",
+                   help="OSQP solves every step's contact problem (default), or only those the certified "
+                        "active-set path cannot (faster, same answers to OSQP's tolerance)")
     p.add_argument("--mu-robot-box", type=_finite_float, default=None,
                    help="friction coefficient of robot-box contacts (default 0.5, assumption C22)")
     p.add_argument("--out", default="run.npz", help="output NPZ (default run.npz)")

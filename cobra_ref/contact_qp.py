@@ -28,8 +28,10 @@ update alone converged in 0 % of them within 10 iterates); 56 of 60 random cold-
 has not converged after ``fp_max`` iterates (50; the stepper uses ``StepSettings.fp_max`` =
 10 because it warm-starts) -- robot, box and ground jam, and redundant contacts (4 box
 corners, 13 spheres on a 6-DoF robot base) leave the split of p_N between them nearly
-undetermined, so the active set cycles -- the iterate closest to a fixed point is kept, its
-friction clipped into the pyramid of its own p_N, and ``QPInfo.status`` says so: the step then
+undetermined, so the active set cycles -- the iterate whose friction leaves its own pyramid
+least is kept (often one whose bound mu pbar_N was below mu p_N, so nothing is clipped; the
+smallest change |p_N - pbar_N| breaks ties), its friction clipped into the pyramid of its own
+p_N, and ``QPInfo.status`` says so: the step then
 obeys the cone exactly but only approximately the stick/slip condition
 (``stick_slip_residual`` reports by how much), and the velocities stay consistent with the
 impulses actually applied.
@@ -291,7 +293,9 @@ class ContactQP:
             pbar_N = _newton_update(P, c, mu, *held)
             pbar_N = np.maximum(p[0::3], 0.0) if pbar_N is None else pbar_N
         total, solves, inaccurate, damped, last_change = 0, 0, False, False, np.inf
-        best = (np.inf, p)  # the iterate closest to a fixed point: what is kept if none is reached
+        # kept if no fixed point is reached: the iterate whose friction leaves its own pyramid
+        # least (relative to max p_N; then the smallest change), so clipping it changes least
+        best = ((np.inf, np.inf), p)
         last_update = "none"
         for fp in range(1, self.fp_max + 1):
             l, u = self._bounds(pbar_N, mu)
@@ -319,8 +323,9 @@ class ContactQP:
             change = np.abs(p_N - pbar_N).max()
             if change <= self.fp_tol * max(p_N.max(), 1e-12):
                 return p, total, fp, solves, True, inaccurate
-            if change < best[0]:
-                best = (change, p)
+            rank = (self._cone_excess(p, mu), change)
+            if rank < best[0]:
+                best = (rank, p)
             # the Newton update (the fixed point on this iterate's active set, K = 4), except
             # right after a Newton update that did not contract (its active set was wrong);
             # then the plain update p_N, relaxed by 1/2 from the first plain one that does not
@@ -351,6 +356,13 @@ class ContactQP:
     def _certify(self, P, c, A, l, u, x, y):
         """(x, y) re-solved on the active set that (x, y) points at, if certified, else None."""
         return certified_solve(P, c, A, l, u, x, y, self.eps, self.eps, self._box[len(c) // 3])
+
+    def _cone_excess(self, p, mu) -> float:
+        """max_i (max_k |d_k . p_T,i| - mu_i p_N,i)_+ / max p_N: how far friction leaves its pyramid."""
+        p3 = p.reshape(-1, 3)
+        p_N = np.maximum(p3[:, 0], 0.0)
+        excess = np.abs(p3[:, 1:] @ self.D.T).max(axis=1) - mu * p_N
+        return max(0.0, float(excess.max())) / max(float(p_N.max()), 1e-12)
 
     def _clip_friction(self, p, mu):
         """Scale each p_T into the pyramid of its own p_N: max_k |d_k . p_T| <= mu p_N."""

@@ -113,4 +113,8 @@ def test_bench_json_has_the_documented_keys(tmp_path, capfd):
     assert {"us_per_step", "real_time_factor", "breakdown_us", "mujoco_us_per_step", "ratio_vs_mujoco"} <= set(record)
     assert set(record["breakdown_us"]) == {"dynamics", "contacts", "qp", "rest"}
     assert record["us_per_step"] > 0 and record["real_time_factor"] > 0
+    fallback = record["osqp_fallback"]
+    assert {"us_per_step", "real_time_factor", "breakdown_us", "osqp_solves_per_step"} <= set(fallback)
+    # OSQP solves every step of the default run, and at most as often in the fallback run
+    assert record["osqp_solves_per_step"] >= 1.0 >= fallback["osqp_solves_per_step"]
     assert "us/step" in capfd.readouterr().out
