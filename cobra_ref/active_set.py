@@ -79,7 +79,10 @@ class BoxForm(NamedTuple):
 
 
 def box_form(A: np.ndarray) -> BoxForm | None:
-    """The BoxForm of A, or None if some row of A is not one +-1 entry on a column of its own."""
+    """The BoxForm of A, or None if some row of A is not one +-1 entry on a column of its own.
+
+    Helper: recognizes the K = 4 friction pyramid's constraint matrix as bounds on variables.
+    """
     nonzero = A != 0
     if A.shape[0] != A.shape[1] or not np.all(nonzero.sum(axis=1) == 1):
         return None
@@ -92,6 +95,8 @@ def box_form(A: np.ndarray) -> BoxForm | None:
 
 def certified_solve(P, q, A, l, u, x0, y0, eps_abs: float, eps_rel: float, box: BoxForm | None = None):
     """(x, y, at_lo, at_hi) of the QP, certified (module docstring), from the iterate (x0, y0); or None.
+
+    Helper: the certified solve of the friction fixed point's QPs ([COBRA] eq. (6)).
 
     The first guess of the active set is the one (x0, y0) points at (``working_set``).
     ``box``: ``box_form(A)`` if A is a signed permutation; then the active-set rounds run, and
@@ -115,8 +120,10 @@ def certified_solve(P, q, A, l, u, x0, y0, eps_abs: float, eps_rel: float, box: 
 
 
 def held_variables(box: BoxForm, x, y, l, u):
-    """(at_lo, at_hi): the variables that the iterate (x, y) holds at their lower/upper bound
-    (``working_set`` on the rows, mapped to the variables they bound)."""
+    """(at_lo, at_hi): the variables that the iterate (x, y) holds at their lower/upper bound.
+
+    Helper: ``working_set`` on the rows, mapped to the variables they bound.
+    """
     ws = working_set(x[box.col] * box.sign, y, l, u)
     at_lo, at_hi = np.empty(len(x), dtype=bool), np.empty(len(x), dtype=bool)
     at_lo[box.col] = np.where(box.sign > 0, ws.at_lower, ws.at_upper)

@@ -45,7 +45,7 @@ from .stepper import SimulationError, StepSettings
 PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
 # the modules whose source decides a simulation's result (part of the cache key)
 PHYSICS_MODULES = ("params", "spatial", "quaternion", "joints", "model", "robots", "kinematics", "fastdyn",
-                   "gaps", "contact", "contact_qp", "stepper", "simulate", "gaits", "reproduce")
+                   "gaps", "contact", "contact_qp", "active_set", "stepper", "simulate", "gaits", "reproduce")
 
 
 @dataclass(frozen=True)

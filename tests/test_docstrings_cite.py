@@ -5,7 +5,8 @@ import inspect
 
 import pytest
 
-MODULES = ["progress", "spatial", "quaternion", "joints", "kinematics", "dynamics", "gaps", "contact", "contact_qp", "mjcf",
+MODULES = ["progress", "spatial", "quaternion", "joints", "kinematics", "dynamics", "gaps", "contact", "contact_qp",
+           "active_set", "mjcf",
            "fastdyn", "stepper", "analysis", "claims", "reproduce", "regenerate", "mujoco_rollout", "atomic",
            "figures.common", "figures.fig03_snapshots", "figures.fig04_robot_contacts", "figures.fig05_box_contacts",
            "figures.fig06_work_efficiency", "figures.fig07_power", "figures.fig08_torques",
