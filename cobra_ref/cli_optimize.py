@@ -16,7 +16,7 @@ import numpy as np
 
 from .gaits import gait_params
 from .shooting import (DECISION, DEFAULTS, RAMP_TIME, SerialExecutor, ShootingError, ShootingProblem,
-                       decision_vector, load_result, make_problem, optimize, shooting_cost,
+                       code_version, decision_vector, load_result, make_problem, optimize, shooting_cost,
                        start_state, summary_lines, write_result)
 
 
@@ -167,6 +167,7 @@ class ParamsRun(NamedTuple):
     model: object  # cobra_model with the recorded CobraParameters
     problem: ShootingProblem
     recorded_cost: float
+    same_code: bool = True  # the physics modules' SHA-256 equals the one the optimum was found with
 
 
 def params_reference(path: str, duration: float | None = None) -> ParamsRun:
@@ -187,7 +188,7 @@ def params_reference(path: str, duration: float | None = None) -> ParamsRun:
     q0, qd0 = start_state(problem, x, model)
     return ParamsRun(problem.gait, problem.reference(x), problem.settings(),
                      problem.duration if duration is None else float(duration), q0, qd0, model, problem,
-                     float(record["cost"]))
+                     float(record["cost"]), record.get("code", {}).get("physics_sha256") == code_version()["physics_sha256"])
 
 
 def cmd_simulate_params(args) -> int:
@@ -219,5 +220,8 @@ def params_summary(run: ParamsRun, traj) -> dict:
     if run.duration != run.problem.duration or len(traj.tau) != round(run.problem.duration / run.problem.dt):
         return {"params_cost": None, "note": "horizon differs from the optimization's: cost not comparable"}
     c = shooting_cost(run.problem, traj)
-    return {"params_cost": c["cost"], "recorded_cost": run.recorded_cost,
-            "cost_matches": c["cost"] == run.recorded_cost, "box_distance_to_goal": c["box_distance_to_goal"]}
+    out = {"params_cost": c["cost"], "recorded_cost": run.recorded_cost,
+           "cost_matches": c["cost"] == run.recorded_cost, "box_distance_to_goal": c["box_distance_to_goal"]}
+    if not run.same_code:
+        out["note"] = "the physics code changed since this optimum was found: the costs need not match"
+    return out

@@ -686,7 +686,7 @@ def _floats(values, n: int | None = None) -> tuple:
 def code_version() -> dict:
     """The package version and a SHA-256 of the physics modules' source (as ``reproduce`` keys its cache).
 
-    Helper: recorded in the params JSON, checked on replay.
+    Helper: recorded in the params JSON; `cobra-ref simulate --params` notes a replay on other code.
     """
     from . import __version__
     from .reproduce import physics_hash
