@@ -181,20 +181,31 @@ def solve_box(P, q, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = RO
             x[free] = x_F
     else:
         return None  # the held set still changes: leave it to OSQP
-    # the certificate (module docstring), for the box form; held variables sit exactly on a
-    # bound, so the largest bound violation over all variables is that of the free ones
-    free = ~(at_lo | at_hi)
-    abs_g = np.abs(g)
-    if max(float((lo - x).max()), float((x - hi).max())) > eps_abs + eps_rel * float(np.abs(x).max()):
-        return None
-    # multipliers: g >= 0 where held at lo, g <= 0 where held at hi (either sign where lo = hi)
-    sign = at_hi.astype(float) - (at_lo & ~fixed)
-    if float((g * sign).max()) > eps_abs + eps_rel * float((abs_g * ~free).max()):
-        return None
-    scale = max(float(np.abs(g - q).max()), float(np.abs(q).max()))
-    if not (np.isfinite(x).all() and float((abs_g * free).max()) <= eps_abs + eps_rel * scale):
+    if not box_certificate(P, q, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, g):
         return None
     return x, at_lo, at_hi, g
+
+
+def box_certificate(P, q, lo, hi, x, at_lo, at_hi, eps_abs: float, eps_rel: float, g=None) -> bool:
+    """True if x, with the variables in at_lo/at_hi held at lo/hi, is the minimiser of
+    1/2 x^T P x + q^T x over lo <= x <= hi: the checks of the module docstring for the box form.
+
+    Helper: primal feasibility, the multipliers' signs (g = P x + q >= 0 where held at lo, <= 0
+    where held at hi, either where lo = hi) and stationarity (g = 0 where free), each within
+    OSQP's tolerance eps_abs + eps_rel * scale.
+    """
+    g = P @ x + q if g is None else g
+    fixed = lo == hi
+    free = ~(at_lo | at_hi)
+    abs_g = np.abs(g)
+    # held variables sit on a bound, so the largest violation over all variables is the free ones'
+    if max(float((lo - x).max()), float((x - hi).max())) > eps_abs + eps_rel * float(np.abs(x).max()):
+        return False
+    sign = at_hi.astype(float) - (at_lo & ~fixed)
+    if float((g * sign).max()) > eps_abs + eps_rel * float((abs_g * ~free).max()):
+        return False
+    scale = max(float(np.abs(g - q).max()), float(np.abs(q).max()))
+    return bool(np.isfinite(x).all() and float((abs_g * free).max()) <= eps_abs + eps_rel * scale)
 
 
 def solve_on_working_set(P: np.ndarray, q: np.ndarray, A: np.ndarray, l: np.ndarray, u: np.ndarray,

@@ -22,11 +22,13 @@ held at +-mu pbar_N) the fixed point is one linear system (``coulomb_fixed_point
 that set is right the next iterate has converged; the first pbar_N is that system solved on
 the warm start's (the previous step's) active set. Right after a Newton step that did not
 contract (its set was wrong), the plain update pbar_N = p_N is taken instead, relaxed by 1/2
-from the first plain one that does not contract (two-cycles). Measured on the built-in
-rolling push (10 s, 87 % of the steps touching the box): 1.3 iterates per rolling step, 2.0
-per pushing step, 94 % of the pushing steps converged (the plain update alone converged on
-none of the pushing steps of a 2 s run within 10 iterates); every one of 60 random cold-started 5-contact problems converges within 8
-iterates on the default path (the plain update needed 10-50, and 8 of the 60 not even then). If it
+from the first plain one that does not contract (two-cycles); a Newton guess whose sum exceeds
+NEWTON_MAX_GROWTH times the last p_N's is not taken (a wrong active set). Measured on the
+built-in rolling push (10 s, 87 % of the steps touching the box): 1.04 iterates per rolling
+step, 1.22 per pushing step, 99.2 % of the pushing steps converged (the plain update alone
+converged on none of the pushing steps of a 2 s run within 10 iterates); every one of 60
+random cold-started 5-contact problems converges within 8 iterates on the default path (the
+plain update needed 10-50, and 8 of the 60 not even then). If it
 has not converged after ``fp_max`` iterates (50; the stepper uses ``StepSettings.fp_max`` =
 10 because it warm-starts) -- robot, box and ground jam, and redundant contacts (4 box
 corners, 13 spheres on a 6-DoF robot base) leave the split of p_N between them nearly
@@ -36,7 +38,9 @@ smallest change |p_N - pbar_N| breaks ties), its friction clipped into the pyram
 p_N, and ``QPInfo.status`` says so: the step then
 obeys the cone exactly but only approximately the stick/slip condition
 (``stick_slip_residual`` reports by how much), and the velocities stay consistent with the
-impulses actually applied.
+impulses actually applied. OSQP failing on a later iterate's bounds ends the fixed point the
+same way (measured: three 10 s figure runs stopped at such a failure before the growth limit
+above); failing on the first, Newton-guessed bounds restarts it from the plain guess.
 ``friction="convex"`` puts mu p_N inside the constraints: the paper's eq. (6) with f in F
 literally, one convex QP, always solvable, but it is the Anitescu relaxation: its KKT
 conditions give w_N = mu |w_T| for a sliding contact, and a fast slide is converted into a
@@ -88,6 +92,7 @@ class QPInfo(NamedTuple):
 # active set, which solve_on_working_set then certifies at the tight tolerance
 LOOSE_EPS = 1e-5
 LOOSE_MAX_ITER = 200
+NEWTON_MAX_GROWTH = 3.0  # a Newton guess of the normal impulses may at most triple their sum
 
 
 def facet_directions(n_facets: int) -> np.ndarray:
@@ -287,13 +292,16 @@ class ContactQP:
         solver = None if fast else self._solver(m, P, c)
         loose = self._solver(m, P, c, loose=True) if fast and self.osqp_every_step else None
         A, box = self._dense_constraints(m)
+        p0, y0 = p, y
         pbar_N = np.maximum(p[0::3], 0.0)
         if box is not None and pbar_N.any():
             # the first guess: the fixed point on the active set of the warm start (the previous
             # step's), so that an unchanged active set converges at the first iterate
             held = held_variables(box, p, y, *self._bounds(pbar_N, mu))
-            pbar_N = _newton_update(P, c, mu, *held)
-            pbar_N = np.maximum(p[0::3], 0.0) if pbar_N is None else pbar_N
+            guess = _newton_update(P, c, mu, *held, pbar_N)
+            pbar_N, newton_start = (pbar_N, False) if guess is None else (guess, True)
+        else:
+            newton_start = False
         total, solves, inaccurate, damped, last_change = 0, 0, False, False, np.inf
         # kept if no fixed point is reached: the iterate whose friction leaves its own pyramid
         # least (relative to max p_N; then the smallest change), so clipping it changes least
@@ -315,7 +323,17 @@ class ContactQP:
             if certified is None:
                 solver = solver or self._solver(m, P, c)
                 solver.warm_start(x=p, y=y)
-                p, y, it, bad = self._run(solver, m, l, u)
+                try:
+                    p, y, it, bad = self._run(solver, m, l, u)
+                except ContactSolveError:
+                    if best[0][0] < np.inf:
+                        break  # OSQP failed on a later iterate's bounds: keep the best iterate so far
+                    if not newton_start:
+                        raise  # no iterate to fall back on
+                    # the first guess came from the warm start's active set: start plainly instead
+                    pbar_N, newton_start = np.maximum(p0[0::3], 0.0), False
+                    p, y = p0, y0
+                    continue
                 total, solves, inaccurate = total + it, solves + 1, inaccurate or bad
                 held = None if box is None else held_variables(box, p, y, l, u)
             else:
@@ -334,13 +352,13 @@ class ContactQP:
             # contract (two-cycles)
             stalled = change > 0.9 * last_change
             damped = damped or (stalled and last_update == "plain")
-            newton = None if (stalled and last_update == "newton") or box is None else _newton_update(P, c, mu, *held)
+            newton = None if (stalled and last_update == "newton") or box is None else _newton_update(P, c, mu, *held, p_N)
             if newton is not None:
                 pbar_N, last_update = newton, "newton"
             else:
                 pbar_N, last_update = (0.5 * (pbar_N + p_N) if damped else p_N), "plain"
             last_change = change
-        return best[1], total, self.fp_max, solves, False, inaccurate
+        return best[1], total, fp, solves, False, inaccurate
 
     def _bounds(self, pbar_N, mu):
         """OSQP's l and u of the fixed-point form: p_N >= 0, |d_k . p_T| <= mu pbar_N."""
@@ -377,14 +395,18 @@ class ContactQP:
         return p
 
 
-def _newton_update(P, c, mu, at_lo, at_hi):
+def _newton_update(P, c, mu, at_lo, at_hi, p_N):
     """The next pbar_N: the normal impulses of ``coulomb_fixed_point`` on the active set
-    (at_lo, at_hi) of the last iterate (K = 4), clipped at 0; None if the solve fails."""
+    (at_lo, at_hi) of the last iterate (K = 4), clipped at 0; None if the solve fails or if
+    their sum exceeds NEWTON_MAX_GROWTH times that of the last iterate's p_N (a wrong active
+    set: measured, up to 800 times, and such bounds can stall OSQP)."""
     try:
-        p_N = coulomb_fixed_point(P, c, mu, at_lo, at_hi)[0::3]
+        guess = np.maximum(coulomb_fixed_point(P, c, mu, at_lo, at_hi)[0::3], 0.0)
     except np.linalg.LinAlgError:
         return None
-    return np.maximum(p_N, 0.0) if np.isfinite(p_N).all() else None
+    if not (np.isfinite(guess).all() and guess.sum() <= NEWTON_MAX_GROWTH * p_N.sum()):
+        return None
+    return guess
 
 
 def coulomb_fixed_point(P: np.ndarray, c: np.ndarray, mu: np.ndarray, at_lo: np.ndarray,

@@ -11,7 +11,7 @@ import osqp
 import pytest
 from scipy import sparse
 
-from cobra_ref.active_set import WorkingSet, box_form, certified_solve, solve_box, solve_on_working_set
+from cobra_ref.active_set import WorkingSet, box_certificate, box_form, certified_solve, solve_box, solve_on_working_set
 from cobra_ref.contact_qp import _constraint_matrix, facet_directions
 
 EPS = 1e-7  # ContactQP's tolerance, used here for both eps_abs and eps_rel
@@ -45,6 +45,31 @@ def test_a_coupled_box_qp_reaches_the_minimiser_from_a_wrong_start_in_a_few_roun
     x, at_lo, at_hi, g = solve_box(P, q, np.zeros(2), np.full(2, np.inf), np.array([0.0, 5.0]), EPS, EPS)
     np.testing.assert_allclose(x, [2.0, 0.0], atol=1e-14)
     np.testing.assert_allclose(g, [0.0, 3.0], atol=1e-14)
+
+
+def test_the_box_certificate_accepts_the_minimiser_and_refuses_each_kind_of_wrong_answer():
+    """The 2-variable problem above (minimiser (2, 0), x_1 held at 0, gradient (0, 3)), with
+    bounds 0 <= x <= 10, and one wrong answer per check of the certificate:
+
+    * (3, -2) with nothing held: the unconstrained minimiser, stationary but below the bound
+      x_1 >= 0 (primal);
+    * (10, 0) with x_0 held at its upper bound 10: its gradient 2 * 10 - 4 = 16 > 0 pushes it
+      down, a wrong-sign multiplier (dual);
+    * (1, 0) with x_1 held: x_0 is free but its gradient 2 - 4 = -2 is not zero (stationarity);
+    * (0, 0) with x_0 and x_1 held at 0: x_0's gradient -4 < 0 would pull it up (dual).
+    """
+    P, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-4.0, 1.0])
+    lo, hi = np.zeros(2), np.full(2, 10.0)
+    no, yes = False, True
+
+    def certified(x, at_lo, at_hi):
+        return box_certificate(P, q, lo, hi, np.array(x), np.array(at_lo), np.array(at_hi), EPS, EPS)
+
+    assert certified([2.0, 0.0], [no, yes], [no, no])
+    assert not certified([3.0, -2.0], [no, no], [no, no])
+    assert not certified([10.0, 0.0], [no, yes], [yes, no])
+    assert not certified([1.0, 0.0], [no, yes], [no, no])
+    assert not certified([0.0, 0.0], [yes, yes], [no, no])
 
 
 def test_a_guess_that_is_not_the_minimiser_is_refused():
@@ -115,4 +140,6 @@ def test_certified_solutions_equal_osqp_on_random_contact_qps(rng, n_facets, mu=
         accepted += 1
         lam_min = np.linalg.eigvalsh(P)[0]
         np.testing.assert_allclose(answer[0], tight.x, atol=2 * EPS * (1 + np.abs(q).max()) / lam_min)
+        # the duals too (the rows of A are independent, so they are unique): OSQP's sign convention
+        np.testing.assert_allclose(answer[1], tight.y, atol=1e-5 * np.abs(tight.y).max())
     assert accepted >= 4, f"only {accepted} of 6 loose iterates led to a certified answer"

@@ -24,7 +24,8 @@ Tolerances come from the solver settings, never from a run:
 import numpy as np
 import pytest
 
-from cobra_ref.contact_qp import ContactQP, _cond_factored, coulomb_fixed_point, facet_directions, kkt_residuals
+from cobra_ref.contact_qp import (ContactQP, _cond_factored, _newton_update, coulomb_fixed_point, facet_directions,
+                                  kkt_residuals)
 
 GRAVITY = 9.81  # [m/s^2]
 DT = 1e-3  # [s]
@@ -247,6 +248,47 @@ def test_the_fixed_point_of_a_sliding_point_mass_is_one_linear_solve(fp_path, ma
     p, info = ContactQP(mu, fp_path=fp_path).solve(_point_mass_delassus(mass), c)
     assert info.status == "solved"
     np.testing.assert_allclose(p, expected, rtol=1e-6)
+
+
+def test_a_newton_guess_that_more_than_triples_the_normal_impulses_is_not_taken(mass=2.0, mu=0.5):
+    """The sliding point mass again: its fixed point has p_N = g dt / (1/m + eps), about 0.0196 N s.
+
+    From a last iterate with that p_N the Newton guess is taken; from one with a thousandth of
+    it the guess would multiply the normal impulse by 1000, so it is refused (None: the plain
+    update is taken instead), the guard against wrong active sets (NEWTON_MAX_GROWTH = 3).
+    """
+    P, c = (1 / mass + REG / mass) * np.eye(3), np.array([-GRAVITY * DT, 1.0, 0.0])
+    at_lo, at_hi = np.array([False, True, False]), np.zeros(3, dtype=bool)
+    p_N = GRAVITY * DT / (1 / mass + REG / mass)
+    np.testing.assert_allclose(_newton_update(P, c, np.array([mu]), at_lo, at_hi, np.array([p_N])), [p_N])
+    assert _newton_update(P, c, np.array([mu]), at_lo, at_hi, np.array([1e-3 * p_N])) is None
+
+
+def test_an_osqp_failure_after_the_first_iterate_keeps_the_best_iterate(rng, monkeypatch, mu=0.5):
+    """OSQP failing on a later fixed-point iterate does not end the step: the best iterate so
+    far is returned with the "not converged" status. The failure is injected on the second
+    OSQP solve of the reference path (fp_path="osqp"); a failure on the first still raises."""
+    from cobra_ref import contact_qp
+
+    G, c = _random_problem(rng, m=5)
+    qp = ContactQP(mu, fp_path="osqp")
+    run, calls = qp._run, []
+
+    def failing_run(*args):
+        calls.append(1)
+        if len(calls) == 2:
+            raise contact_qp.ContactSolveError("injected")
+        return run(*args)
+
+    monkeypatch.setattr(qp, "_run", failing_run)
+    p, info = qp.solve(G, c)
+    assert info.status.startswith("solved (fixed point not converged") and info.fp_iterations == 2
+    comp, cone, _ = kkt_residuals(G, c, p, mu, facet_directions(4))
+    assert cone <= 1e-9, "the kept iterate is clipped into the pyramid"
+    calls.clear()
+    monkeypatch.setattr(qp, "_run", lambda *a: (_ for _ in ()).throw(contact_qp.ContactSolveError("first")))
+    with pytest.raises(contact_qp.ContactSolveError):
+        qp.solve(G, c)
 
 
 def test_fast_and_reference_fixed_points_give_the_same_impulses(rng, mu=0.5):
