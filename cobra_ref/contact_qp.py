@@ -199,7 +199,7 @@ class ContactQP:
             self.y = np.zeros(0)
             return np.zeros(0), QPInfo("solved", 0, 0, 0.0, 0.0, 0.0, 1.0, 0)
         mu = np.full(m, self.mu) if mu is None else np.broadcast_to(np.asarray(mu, dtype=float), (m,))
-        if not (np.isfinite(mu).all() and (mu >= 0).all()):
+        if not (mu.min() >= 0.0 and np.isfinite(mu.max())):  # NaN fails the first test
             raise ValueError(f"friction coefficients must be finite and >= 0, got {mu}")
         # eq. (6) with a small uniform regularization eps I (module docstring)
         eps_I = self.reg * max(G.trace() / (3 * m), 1e-300)
@@ -446,6 +446,8 @@ def kkt_residuals(G: np.ndarray, c: np.ndarray, p: np.ndarray, mu, D: np.ndarray
 
     w = G p + c. Returns (max |p_N w_N|, relative cone violation, max |w_T| among contacts
     whose tangential impulse is strictly inside the pyramid). ``mu``: scalar or one per contact.
+    "Strictly inside" means inside by more than 1e-6 mu max p_N, the same scale as the cone
+    residual: a contact carrying a tiny load and sliding at its bound is not counted as sticking.
     """
     if len(p) == 0:
         return 0.0, 0.0, 0.0
@@ -454,9 +456,10 @@ def kkt_residuals(G: np.ndarray, c: np.ndarray, p: np.ndarray, mu, D: np.ndarray
     comp = float(np.abs(p_N * w3[:, 0]).max())
     facet = np.abs(p3[:, 1:] @ D.T)  # (m, K/2)
     scale = max(float(p_N.max()), 1e-12)
-    bound = (np.asarray(mu, dtype=float) * p_N)[:, None]
+    mu = np.broadcast_to(np.asarray(mu, dtype=float), p_N.shape)
+    bound = (mu * p_N)[:, None]
     cone = max(0.0, float((facet - bound).max())) / scale
-    inside = (facet < bound * (1 - 1e-6)).all(axis=1) & (p_N > 1e-9 * scale)
+    inside = (facet < bound - 1e-6 * scale * mu[:, None]).all(axis=1) & (p_N > 1e-9 * scale)
     w_T = w3[inside, 1:]
     stick = float(np.sqrt((w_T * w_T).sum(axis=1).max())) if len(w_T) else 0.0
     return comp, cone, stick

@@ -433,6 +433,25 @@ def test_kkt_residuals_measure_complementarity_cone_and_stick_violations():
     np.testing.assert_allclose(stick, 0.3, atol=1e-15)
 
 
+def test_a_lightly_loaded_contact_sliding_at_its_bound_is_not_counted_as_sticking():
+    """Two contacts (G = I, mu = 0.5): one carries p_N = 1 and sticks (w_T = 0); the other carries
+    p_N = 1e-6 and slides at w_t1 = 0.1 m/s with p_t1 = -mu p_N (1 - 2e-6), on its bound to within
+    1e-12 N s. "Strictly inside" is measured against the largest load (by 1e-6 mu max p_N =
+    5e-7 N s), so the stick residual is 0, not 0.1 (a 10 s run reported such a contact before
+    this scale was used). A contact with p_N = 1e-3 and p_t1 = 0, clearly inside, sliding at
+    0.1 m/s, does count: residual 0.1.
+    """
+    G, D = np.eye(6), facet_directions(4)
+    p = np.array([1.0, 0.0, 0.0, 1e-6, -0.5e-6 * (1 - 2e-6), 0.0])
+    c = np.array([-1.0, 0.0, 0.0, -1e-6, 0.1 - p[4], 0.0])  # w = p + c: w_N = 0, w_t1 = 0.1
+    _, _, stick = kkt_residuals(G, c, p, 0.5, D)
+    assert stick == 0.0
+    p[3:5] = 1e-3, 0.0
+    c[3:5] = -1e-3, 0.1
+    _, _, stick = kkt_residuals(G, c, p, 0.5, D)
+    np.testing.assert_allclose(stick, 0.1, atol=1e-15)
+
+
 @pytest.mark.parametrize("n_facets", [3, 2, 0, 5])
 def test_facet_count_must_be_even_and_at_least_four(n_facets):
     """K facets make a regular K-gon from K/2 directions: K must be even and >= 4."""
