@@ -76,6 +76,7 @@ class BoxForm(NamedTuple):
 
     col: np.ndarray
     sign: np.ndarray
+    positive: bool  # every sign is +1 (the friction pyramid's rows)
 
 
 def box_form(A: np.ndarray) -> BoxForm | None:
@@ -90,7 +91,7 @@ def box_form(A: np.ndarray) -> BoxForm | None:
     sign = A[np.arange(len(col)), col]
     if len(np.unique(col)) != len(col) or not np.all(np.abs(sign) == 1.0):
         return None
-    return BoxForm(col, sign)
+    return BoxForm(col, sign, bool((sign > 0).all()))
 
 
 def certified_solve(P, q, A, l, u, x0, y0, eps_abs: float, eps_rel: float, box: BoxForm | None = None):
@@ -108,8 +109,8 @@ def certified_solve(P, q, A, l, u, x0, y0, eps_abs: float, eps_rel: float, box: 
         return None if solved is None else (*solved, None, None)
     # the bounds per variable: l_r <= s_r x_c <= u_r
     lo, hi = np.empty(len(q)), np.empty(len(q))
-    lo[box.col] = np.where(box.sign > 0, l, -u)
-    hi[box.col] = np.where(box.sign > 0, u, -l)
+    lo[box.col] = l if box.positive else np.where(box.sign > 0, l, -u)
+    hi[box.col] = u if box.positive else np.where(box.sign > 0, u, -l)
     solved = solve_box(P, q, lo, hi, x0, eps_abs, eps_rel, guess=held_variables(box, x0, y0, l, u))
     if solved is None:
         return None
@@ -124,10 +125,10 @@ def held_variables(box: BoxForm, x, y, l, u):
 
     Helper: ``working_set`` on the rows, mapped to the variables they bound.
     """
-    ws = working_set(x[box.col] * box.sign, y, l, u)
+    ws = working_set(x[box.col] if box.positive else x[box.col] * box.sign, y, l, u)
     at_lo, at_hi = np.empty(len(x), dtype=bool), np.empty(len(x), dtype=bool)
-    at_lo[box.col] = np.where(box.sign > 0, ws.at_lower, ws.at_upper)
-    at_hi[box.col] = np.where(box.sign > 0, ws.at_upper, ws.at_lower)
+    at_lo[box.col] = ws.at_lower if box.positive else np.where(box.sign > 0, ws.at_lower, ws.at_upper)
+    at_hi[box.col] = ws.at_upper if box.positive else np.where(box.sign > 0, ws.at_upper, ws.at_lower)
     return at_lo, at_hi
 
 
@@ -142,7 +143,7 @@ def solve_box(P, q, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = RO
     fixed = lo == hi
     x, before = x0, None
     for r in range(rounds + SINGLE_FLIPS + 1):
-        g = P @ x + q
+        g = P @ x + q if (r or guess is None) else None  # the guess needs no gradient
         if r == 0 and guess is not None:
             at_lo, at_hi = guess
             at_hi = at_hi & ~fixed
