@@ -25,7 +25,7 @@ with tol = eps_abs + eps_rel * scale, OSQP's own termination test, so an accepte
 accurate as OSQP's. Otherwise the caller asks OSQP. Rows with l_i = u_i (a contact whose
 friction bound is zero) are always in W and their y may take either sign.
 
-With K = 4 facets every row of A bounds one impulse component (A is a signed permutation), so
+With K = 4 facets every row of A bounds one impulse component (A is a permutation), so
 the QP is box-constrained, lo <= x <= hi, and the guess is improved by the primal-dual
 active-set iteration of Hintermueller, Ito & Kunisch (SIAM J. Optim. 13, 2002), with
 g = P x + q and d = diag(P)::
@@ -72,26 +72,24 @@ _posv = linalg.get_lapack_funcs("posv", (np.zeros(1),))
 
 
 class BoxForm(NamedTuple):
-    """A constraint matrix that is a signed permutation: row r bounds variable col[r] (times sign[r])."""
+    """A constraint matrix that is a permutation: row r is the unit row of variable col[r]."""
 
     col: np.ndarray
-    sign: np.ndarray
-    positive: bool  # every sign is +1 (the friction pyramid's rows)
 
 
 def box_form(A: np.ndarray) -> BoxForm | None:
-    """The BoxForm of A, or None if some row of A is not one +-1 entry on a column of its own.
+    """The BoxForm of A, or None if some row of A is not one entry 1 on a column of its own.
 
-    Helper: recognizes the K = 4 friction pyramid's constraint matrix as bounds on variables.
+    Helper: recognizes the K = 4 friction pyramid's constraint matrix (rows p_N, t1 . p_T,
+    t2 . p_T) as bounds on the variables.
     """
     nonzero = A != 0
     if A.shape[0] != A.shape[1] or not np.all(nonzero.sum(axis=1) == 1):
         return None
     col = np.argmax(nonzero, axis=1)
-    sign = A[np.arange(len(col)), col]
-    if len(np.unique(col)) != len(col) or not np.all(np.abs(sign) == 1.0):
+    if len(np.unique(col)) != len(col) or not np.all(A[np.arange(len(col)), col] == 1.0):
         return None
-    return BoxForm(col, sign, bool((sign > 0).all()))
+    return BoxForm(col)
 
 
 def certified_solve(P, q, A, l, u, x0, y0, eps_abs: float, eps_rel: float, box: BoxForm | None = None):
@@ -100,23 +98,22 @@ def certified_solve(P, q, A, l, u, x0, y0, eps_abs: float, eps_rel: float, box: 
     Helper: the certified solve of the friction fixed point's QPs ([COBRA] eq. (6)).
 
     The first guess of the active set is the one (x0, y0) points at (``working_set``).
-    ``box``: ``box_form(A)`` if A is a signed permutation; then the active-set rounds run, and
+    ``box``: ``box_form(A)`` if A is a permutation; then the active-set rounds run, and
     at_lo/at_hi are the (n,) masks of the variables held at their lower/upper bound. For other
     A the first guess is the only one, and at_lo/at_hi are None.
     """
     if box is None:
         solved = solve_on_working_set(P, q, A, l, u, working_set(A @ x0, y0, l, u), eps_abs, eps_rel)
         return None if solved is None else (*solved, None, None)
-    # the bounds per variable: l_r <= s_r x_c <= u_r
+    # the bounds per variable: l_r <= x_c <= u_r
     lo, hi = np.empty(len(q)), np.empty(len(q))
-    lo[box.col] = l if box.positive else np.where(box.sign > 0, l, -u)
-    hi[box.col] = u if box.positive else np.where(box.sign > 0, u, -l)
+    lo[box.col], hi[box.col] = l, u
     solved = solve_box(P, q, lo, hi, x0, eps_abs, eps_rel, guess=held_variables(box, x0, y0, l, u))
     if solved is None:
         return None
     x, at_lo, at_hi, g = solved
-    # OSQP's duals: g_c + s_r y_r = 0 on held rows, 0 on free ones
-    y = np.where((at_lo | at_hi)[box.col], -g[box.col] * box.sign, 0.0)
+    # OSQP's duals: g_c + y_r = 0 on held rows, 0 on free ones
+    y = np.where((at_lo | at_hi)[box.col], -g[box.col], 0.0)
     return x, y, at_lo, at_hi
 
 
@@ -125,10 +122,9 @@ def held_variables(box: BoxForm, x, y, l, u):
 
     Helper: ``working_set`` on the rows, mapped to the variables they bound.
     """
-    ws = working_set(x[box.col] if box.positive else x[box.col] * box.sign, y, l, u)
+    ws = working_set(x[box.col], y, l, u)
     at_lo, at_hi = np.empty(len(x), dtype=bool), np.empty(len(x), dtype=bool)
-    at_lo[box.col] = ws.at_lower if box.positive else np.where(box.sign > 0, ws.at_lower, ws.at_upper)
-    at_hi[box.col] = ws.at_upper if box.positive else np.where(box.sign > 0, ws.at_upper, ws.at_lower)
+    at_lo[box.col], at_hi[box.col] = ws.at_lower, ws.at_upper
     return at_lo, at_hi
 
 
@@ -158,9 +154,8 @@ def solve_box(P, q, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = RO
             # multiplier has the wrong sign
             at_lo, at_hi = before[0].copy(), before[1].copy()
             free = ~(at_lo | at_hi)
-            # each violation in units of its own certificate tolerance (below)
-            tol_p = eps_abs + eps_rel * float(np.abs(x).max())
-            tol_d = eps_abs + eps_rel * float(np.abs(g * ~free).max())
+            # each violation in units of its own certificate tolerance (box_certificate)
+            tol_p, tol_d = _box_tolerances(x, g, free, eps_abs, eps_rel)
             violation = np.concatenate([np.where(free, lo - x, 0.0) / tol_p, np.where(free, x - hi, 0.0) / tol_p,
                                         -g * (at_lo & ~fixed) / tol_d, g * at_hi / tol_d])
             worst = int(np.argmax(violation))
@@ -199,14 +194,21 @@ def box_certificate(P, q, lo, hi, x, at_lo, at_hi, eps_abs: float, eps_rel: floa
     fixed = lo == hi
     free = ~(at_lo | at_hi)
     abs_g = np.abs(g)
+    tol_p, tol_d = _box_tolerances(x, g, free, eps_abs, eps_rel)
     # held variables sit on a bound, so the largest violation over all variables is the free ones'
-    if max(float((lo - x).max()), float((x - hi).max())) > eps_abs + eps_rel * float(np.abs(x).max()):
+    if max(float((lo - x).max()), float((x - hi).max())) > tol_p:
         return False
     sign = at_hi.astype(float) - (at_lo & ~fixed)
-    if float((g * sign).max()) > eps_abs + eps_rel * float((abs_g * ~free).max()):
+    if float((g * sign).max()) > tol_d:
         return False
     scale = max(float(np.abs(g - q).max()), float(np.abs(q).max()))
     return bool(np.isfinite(x).all() and float((abs_g * free).max()) <= eps_abs + eps_rel * scale)
+
+
+def _box_tolerances(x, g, free, eps_abs: float, eps_rel: float) -> tuple[float, float]:
+    """OSQP's tolerances eps_abs + eps_rel * scale for the bounds (scale max |x|) and for the
+    multipliers (scale max |g| over the held variables)."""
+    return (eps_abs + eps_rel * float(np.abs(x).max()), eps_abs + eps_rel * float(np.abs(g * ~free).max()))
 
 
 def solve_on_working_set(P: np.ndarray, q: np.ndarray, A: np.ndarray, l: np.ndarray, u: np.ndarray,

@@ -89,7 +89,7 @@ class QPInfo(NamedTuple):
 
 
 # the fast path's loose OSQP solve (ContactQP docstring): its answer is only a guess of the
-# active set, which solve_on_working_set then certifies at the tight tolerance
+# active set, which active_set.certified_solve then certifies at the tight tolerance
 LOOSE_EPS = 1e-5
 LOOSE_MAX_ITER = 200
 NEWTON_MAX_GROWTH = 3.0  # a Newton guess of the normal impulses may at most triple their sum
@@ -178,6 +178,8 @@ class ContactQP:
         self.mu, self.D, self.reg, self.friction = mu, facet_directions(n_facets), reg, friction
         self.eps, self.fp_tol, self.fp_max, self.max_iter = eps, fp_tol, fp_max, max_iter
         self.fp_path = fp_path
+        # OSQP's constraint rows (and duals) per contact: p_N, then the facets (twice for the cone)
+        self.rows_per_contact = 1 + (1 if friction == "fixed-point" else 2) * len(self.D)
         self._solvers: dict = {}
         self._upper: dict = {}  # m -> CSC order of the upper triangle of P (3m x 3m)
         self._A_dense: dict = {}  # m -> the fixed-point form's constraint matrix, dense
@@ -206,7 +208,7 @@ class ContactQP:
         P = G.copy()
         P.flat[::3 * m + 1] += eps_I
         p0 = np.zeros(3 * m) if p_warm is None else np.asarray(p_warm, dtype=float).copy()
-        n_rows = m * (1 + (1 if self.friction == "fixed-point" else 2) * len(self.D))
+        n_rows = m * self.rows_per_contact
         y0 = np.zeros(n_rows) if y_warm is None else np.asarray(y_warm, dtype=float)
         status, iters, fp, solves = "solved", 0, 1, 1
         if self.friction == "fixed-point":
@@ -220,8 +222,8 @@ class ContactQP:
             p, _, iters, inaccurate = self._run(solver, m, np.zeros(n_rows), np.full(n_rows, np.inf))
         if inaccurate and status == "solved":
             status = "solved inaccurate"
-        info = QPInfo(status, iters, fp, *kkt_residuals(G, c, p, mu, self.D), cond_G=_cond(P) if G_factor is None else _cond_factored(G_factor, eps_I),
-                      osqp_solves=solves)
+        cond_G = _cond(P) if G_factor is None else _cond_factored(G_factor, eps_I)
+        info = QPInfo(status, iters, fp, *kkt_residuals(G, c, p, mu, self.D), cond_G=cond_G, osqp_solves=solves)
         return p, info
 
     @staticmethod
@@ -310,7 +312,8 @@ class ContactQP:
         for fp in range(1, self.fp_max + 1):
             l, u = self._bounds(pbar_N, mu)
             # the first iterate goes to OSQP unless osqp="fallback" (class docstring)
-            certified = self._certify(P, c, A, l, u, p, y) if fast and (fp > 1 or not self.osqp_every_step) else None
+            certified = (certified_solve(P, c, A, l, u, p, y, self.eps, self.eps, box)
+                         if fast and (fp > 1 or not self.osqp_every_step) else None)
             if fast and certified is None:
                 loose = loose or self._solver(m, P, c, loose=True)
                 loose.warm_start(x=p, y=y)
@@ -319,7 +322,7 @@ class ContactQP:
                 total, solves = total + res.info.iter, solves + 1
                 if res.info.status in ("solved", "solved inaccurate"):
                     p, y = res.x, res.y
-                    certified = self._certify(P, c, A, l, u, p, y)
+                    certified = certified_solve(P, c, A, l, u, p, y, self.eps, self.eps, box)
             if certified is None:
                 solver = solver or self._solver(m, P, c)
                 solver.warm_start(x=p, y=y)
@@ -372,10 +375,6 @@ class ContactQP:
             self._A_dense[m] = _constraint_matrix(m, self.D).toarray()
             self._box[m] = box_form(self._A_dense[m])
         return self._A_dense[m], self._box[m]
-
-    def _certify(self, P, c, A, l, u, x, y):
-        """(x, y) re-solved on the active set that (x, y) points at, if certified, else None."""
-        return certified_solve(P, c, A, l, u, x, y, self.eps, self.eps, self._box[len(c) // 3])
 
     def _cone_excess(self, p, mu) -> float:
         """max_i (max_k |d_k . p_T,i| - mu_i p_N,i)_+ / max p_N: how far friction leaves its pyramid."""

@@ -105,26 +105,23 @@ def point_jacobian(model: Model, q, body, point, kin: Kinematics | None = None) 
     return kin.R[b] @ (J_b[3:] - skew(point) @ J_b[:3])
 
 
-def integrate(model: Model, q, qd, dt: float, check: bool = True) -> np.ndarray:
+def integrate(model: Model, q, qd, dt: float) -> np.ndarray:
     """Configuration after moving with constant generalized velocity qd for time dt.
 
     Implements: MuJoCo's ``mj_integratePos``: for a free joint
     p <- p + dt v_world and quat <- quat * exp(dt w_body) (body-frame angular velocity
     multiplies on the right), renormalized; for a revolute joint theta <- theta + dt thetad.
-    ``check=False`` skips the input checks (the time stepper's own, already valid, states).
     """
-    if check:
-        q, qd = model.check_q(q), model.check_qd(qd)
-        if not np.isfinite(dt):
-            raise ModelError(f"dt must be finite, got {dt}")
-    q = q.copy()
+    q = model.check_q(q).copy()
+    qd = model.check_qd(qd)
+    if not np.isfinite(dt):
+        raise ModelError(f"dt must be finite, got {dt}")
     for i, jt in enumerate(model.joint_type):
         iq, iv = model.q_idx[i], model.v_idx[i]
         if jt == "free":
             q_i, qd_i = q[iq], qd[iv]
             quat = quat_mul(q_i[3:], quat_exp(dt * qd_i[3:]))
-            q[iq.start:iq.start + 3] += dt * qd_i[:3]
-            q[iq.start + 3:iq.stop] = quat / np.linalg.norm(quat)
+            q[iq] = np.concatenate([q_i[:3] + dt * qd_i[:3], quat / np.linalg.norm(quat)])
         else:
             q[iq] = q[iq] + dt * qd[iv]
     return q

@@ -104,7 +104,10 @@ class Stepper:
         prescribed = settings.servo == "prescribed"
         self.free = np.setdiff1d(np.arange(model.nv), self.act) if prescribed else np.arange(model.nv)
         self.prescribed = np.setdiff1d(np.arange(model.nv), self.free)
-        self._warm: tuple = ({}, None)  # (contact key -> row, rows of [p, duals] + a zero row)
+        # warm starts: (contact key -> row, rows of [p_N, p_t1, p_t2, OSQP duals]); the last row is
+        # all zeros, the start of a new contact
+        self._no_warm = ({}, np.zeros((1, 3 + self.qp.rows_per_contact)))
+        self._warm = self._no_warm
         self._hint: dict = {}
         self.timing = dict.fromkeys(PHASES, 0.0)  # seconds spent in each phase, summed over steps
 
@@ -175,24 +178,20 @@ class Stepper:
 
     def _warm_start(self, keys):
         """This step's starting impulses and OSQP duals: the previous step's, contact by contact
-        (zero for a new contact). Remembered rows are [p_N, p_t1, p_t2, duals...], and the
-        last remembered row is all zeros (the start of a new contact)."""
+        (zero for a new contact: the last remembered row)."""
         if not keys:
             return None, None
         index, rows = self._warm
-        if rows is None:
-            k_y = 1 + len(self.qp.D) * (1 if self.s.friction == "fixed-point" else 2)
-            rows = np.zeros((1, 3 + k_y))
         picked = rows[[index.get(k, -1) for k in keys]]
         return picked[:, :3].ravel(), self.qp.duals_stacked(picked[:, 3:])
 
     def _remember(self, keys, p, w, contacts):
         """Warm starts and the sliding directions for the next step's contact frames."""
         if not keys:
-            self._warm, self._hint = ({}, None), {}
+            self._warm, self._hint = self._no_warm, {}
             return
         rows = np.concatenate([p.reshape(-1, 3), self.qp.duals_per_contact(self.qp.y, len(keys))], axis=1)
-        self._warm = (dict(zip(keys, range(len(keys)))), np.concatenate([rows, np.zeros((1, rows.shape[1]))]))
+        self._warm = (dict(zip(keys, range(len(keys)))), np.concatenate([rows, self._no_warm[1]]))
         # sliding velocity w_T = t1 w_t1 + t2 w_t2 (world) of the contacts that slip faster than 1 mm/s
         w_T = contacts.frame[:, :, 1:] @ w.reshape(-1, 3)[:, 1:, None]
         sliding = np.flatnonzero((w_T * w_T).sum(axis=(1, 2)) > 1e-12)
@@ -214,7 +213,7 @@ class Stepper:
         return q_next
 
     def reset(self):
-        self._warm, self._hint = ({}, None), {}
+        self._warm, self._hint = self._no_warm, {}
         self.timing = dict.fromkeys(PHASES, 0.0)
 
 

@@ -89,13 +89,19 @@ print(f"plateau A < gap0: J in [{J_grid[A_grid < gap0].min():.4f}, {J_grid[A_gri
 # one vectorised `toy_rollout` call.
 
 # %%
+def recording_batch(path):
+    """A batch of toy rollouts that records every point it evaluates in ``path``."""
+
+    def batch(xs):
+        xs = np.asarray(xs)
+        path.extend(xs)
+        return list(toy_rollout(xs[:, 0], xs[:, 1])[0])
+
+    return batch
+
+
 path = []
-
-
-def toy_batch(xs):
-    xs = np.asarray(xs)
-    path.extend(xs)
-    return list(toy_rollout(xs[:, 0], xs[:, 1])[0])
+toy_batch = recording_batch(path)
 
 
 x_best, J_best, why = sh.compass_search(toy_batch, x0=[0.1, 1.5], lower=[0.0, 0.25], upper=[0.3, 2.0],
@@ -111,12 +117,7 @@ print(f"{why}; {len(path)} rollouts; optimum A = {x_best[0]:.4f} m, f = {x_best[
 
 # %%
 de_path = []
-
-
-def toy_batch_de(xs):
-    xs = np.asarray(xs)
-    de_path.extend(xs)
-    return list(toy_rollout(xs[:, 0], xs[:, 1])[0])
+toy_batch_de = recording_batch(de_path)
 
 
 x_de, J_de, why_de = sh.differential_evolution_search(toy_batch_de, x0=[0.1, 1.5], lower=[0.0, 0.25],
