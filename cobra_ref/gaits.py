@@ -176,7 +176,10 @@ GAITS = {
 def gait(name: str, **params):
     """The gait ``name`` with its default parameters, or with ``params`` (the dataclass fields:
     amplitude, frequency, phase, ramp_time, s_J, ... ) replacing them; a clear error for an
-    unknown gait or parameter."""
+    unknown gait or parameter.
+
+    Helper: the gait library.
+    """
     if name not in GAITS:
         raise GaitError(f"unknown gait {name!r}; gaits: {', '.join(GAITS)}")
     cls, fixed = GAITS[name]
@@ -188,5 +191,8 @@ def gait(name: str, **params):
 
 
 def gait_params(g) -> dict:
-    """The free parameters of a gait object as a JSON-ready dict (the inverse of ``gait``)."""
+    """The free parameters of a gait object as a JSON-ready dict (the inverse of ``gait``).
+
+    Helper: the gait library.
+    """
     return {f: getattr(g, f) for f in g.__dataclass_fields__ if f != "shape"}

@@ -49,7 +49,10 @@ class SplineReference:
 
 
 def load_reference(path: str) -> SplineReference:
-    """Read a reference file (.npz or .csv, see the module docstring) with clear errors."""
+    """Read a reference file (.npz or .csv, see the module docstring) with clear errors.
+
+    Helper: joint references for the stepper.
+    """
     if not os.path.isfile(path):
         raise ReferenceError(f"reference file not found: {path}")
     try:
@@ -75,7 +78,10 @@ def load_reference(path: str) -> SplineReference:
 
 def builtin_reference(name: str):
     """A built-in reference (a gait of :mod:`cobra_ref.gaits` with its defaults) by name, with a
-    clear error for an unknown one."""
+    clear error for an unknown one.
+
+    Helper: joint references for the stepper.
+    """
     try:
         return gait(name)
     except GaitError as exc:

@@ -32,15 +32,15 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .atomic import atomic_write
-from .contact import KINDS, find_contacts
-from .contact_qp import ContactSolveError
+from .output import atomic_write
+from .fast.contacts import KINDS, find_contacts
+from .fast.contact_qp import ContactSolveError
 from .kinematics import forward_kinematics
 from .model import Model
 from .quaternion import quat_exp, quat_mul
 from .gaits import N_JOINTS
 from .robots import neutral_q
-from .stepper import SimulationError, StepSettings, Stepper
+from .fast.stepper import SimulationError, StepSettings, Stepper
 
 # per-step solver status: 1 solved, 2 OSQP "solved inaccurate", 3 friction fixed point not converged
 STATUS_CODES = {"solved": 1, "solved inaccurate": 2, "not converged": 3}
@@ -119,6 +119,8 @@ def initial_state(model: Model, reference, box_offset=None, box_gap: float = 0.0
 
     The robot's base is first turned so that its start shape lies on its flattest side
     (``_rest_on_flattest_side``; no turn for the planar rolling shapes).
+
+    Helper: the simulation loop.
     """
     q = neutral_q(model)
     act_q = [model.q_idx[i].start for i, jt in enumerate(model.joint_type) if jt != "free"]
@@ -182,6 +184,8 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
     Raises ``SimulationError`` for a bad duration, an initial state in deep penetration, or a
     contact solver failure mid-run; the failure names the step and time, and its
     ``trajectory`` attribute keeps everything computed before it.
+
+    Helper: the simulation loop.
     """
     if not (np.isfinite(duration) and duration > 0):
         raise SimulationError(f"duration must be positive and finite, got {duration}")
@@ -215,7 +219,10 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
 
 
 def meta(stepper: Stepper) -> dict:
-    """What a run was made with (settings, friction, model), and the seconds spent per phase."""
+    """What a run was made with (settings, friction, model), and the seconds spent per phase.
+
+    Helper: the simulation loop.
+    """
     model = stepper.model
     return {"settings": asdict(stepper.s), "model": model.name, "nq": model.nq, "nv": model.nv,
             "mu": model.mu, "mu_robot_box": model.mu_rb,

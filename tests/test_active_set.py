@@ -11,8 +11,8 @@ import osqp
 import pytest
 from scipy import sparse
 
-from cobra_ref.active_set import WorkingSet, box_certificate, box_form, certified_solve, solve_box, solve_on_working_set
-from cobra_ref.contact_qp import _constraint_matrix, facet_directions
+from cobra_ref.fast.active_set import WorkingSet, box_certificate, box_form, certified_solve, solve_box, solve_on_working_set
+from cobra_ref.fast.contact_qp import _constraint_matrix, facet_directions
 
 EPS = 1e-7  # ContactQP's tolerance, used here for both eps_abs and eps_rel
 

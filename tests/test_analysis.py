@@ -6,7 +6,7 @@ import pytest
 from cobra_ref import analysis
 from cobra_ref.kinematics import forward_kinematics
 from cobra_ref.quaternion import quat_to_rot
-from cobra_ref.reproduce import RunSpec, run
+from cobra_ref.reproduce.runs import RunSpec, run
 from cobra_ref.robots import cobra_model
 
 

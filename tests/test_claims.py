@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from cobra_ref.cli import main
-from cobra_ref.claims import paper_claims
+from cobra_ref.reproduce.claims import paper_claims
 from cobra_ref.quaternion import quat_to_rot
 from cobra_ref.simulate import Trajectory
 

@@ -8,8 +8,8 @@ finite differences of those gaps: W_i^T = dg_i/dq along every velocity direction
 import numpy as np
 import pytest
 
-from cobra_ref.contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND, contact_jacobian, find_contacts
-from cobra_ref.fastdyn import ChainModel
+from cobra_ref.fast.contacts import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND, contact_jacobian, find_contacts
+from cobra_ref.fast.chain import ChainModel
 from cobra_ref.gaps import (
     box_corner_plane_gaps,
     contact_frame,

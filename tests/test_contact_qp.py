@@ -24,7 +24,7 @@ Tolerances come from the solver settings, never from a run:
 import numpy as np
 import pytest
 
-from cobra_ref.contact_qp import (ContactQP, _cond_factored, _newton_update, coulomb_fixed_point, facet_directions,
+from cobra_ref.fast.contact_qp import (ContactQP, _cond_factored, _newton_update, coulomb_fixed_point, facet_directions,
                                   kkt_residuals)
 
 GRAVITY = 9.81  # [m/s^2]
@@ -268,7 +268,7 @@ def test_an_osqp_failure_after_the_first_iterate_keeps_the_best_iterate(rng, mon
     """OSQP failing on a later fixed-point iterate does not end the step: the best iterate so
     far is returned with the "not converged" status. The failure is injected on the second
     OSQP solve of the reference path (fp_path="osqp"); a failure on the first still raises."""
-    from cobra_ref import contact_qp
+    from cobra_ref.fast import contact_qp
 
     G, c = _random_problem(rng, m=5)
     qp = ContactQP(mu, fp_path="osqp")

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import cobra_ref as cr
-from cobra_ref.fastdyn import ChainModel
+from cobra_ref.fast.chain import ChainModel
 from cobra_ref.model import ModelError
 
 

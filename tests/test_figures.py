@@ -15,8 +15,8 @@ import pytest
 from matplotlib import image as mpimg
 from PIL import Image
 
-from cobra_ref.figures import FIGURES, PAPER_FIGURES, animate, common, make_all
-from cobra_ref.reproduce import PAPER_GAITS, RunSpec, run_all
+from cobra_ref.reproduce.figures import FIGURES, PAPER_FIGURES, animate, common, make_all
+from cobra_ref.reproduce.runs import PAPER_GAITS, RunSpec, run_all
 
 DURATION = 0.5
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -57,7 +57,7 @@ def no_temp_files(out_dir):
 @pytest.mark.parametrize("name", PAPER_FIGURES)
 def test_figure_module_writes_png_and_pdf(name, results, cobra, tmp_path):
     """make() writes <stem>.png (a decodable raster) and <stem>.pdf, atomically (no temp files left)."""
-    module = importlib.import_module(f"cobra_ref.figures.{name}")
+    module = importlib.import_module(f"cobra_ref.reproduce.figures.{name}")
     paths = module.make(results, str(tmp_path), cobra)
     assert sorted(os.path.splitext(p)[1] for p in paths) == [".pdf", ".png"]
     assert all(os.path.basename(p).startswith(name) for p in paths)
@@ -96,9 +96,9 @@ def test_missing_gaits_and_an_empty_contact_log_do_not_crash(results, cobra, tmp
 
 
 def test_script_entry_point_uses_the_cache(cache_dir, tmp_path, capsys):
-    """common.main (the `python -m cobra_ref.figures.<module>` path) reads the cached runs and
+    """common.main (the `python -m cobra_ref.reproduce.figures.<module>` path) reads the cached runs and
     prints the paths it wrote."""
-    from cobra_ref.figures import fig06_work_efficiency
+    from cobra_ref.reproduce.figures import fig06_work_efficiency
 
     argv = ["--out", str(tmp_path), "--cache", cache_dir, "--duration", str(DURATION)]
     paths = common.main(fig06_work_efficiency.make, argv)
@@ -128,7 +128,7 @@ def test_minmax_decimation_keeps_the_extremes():
 def test_figure_functions_say_what_they_implement(name):
     """The rule of tests/test_docstrings_cite.py, applied to the figure package: every public
     function has an "Implements:" or "Helper:" line, and every module a docstring."""
-    module = importlib.import_module("cobra_ref.figures" if name == "__init__" else f"cobra_ref.figures.{name}")
+    module = importlib.import_module("cobra_ref.reproduce.figures" if name == "__init__" else f"cobra_ref.reproduce.figures.{name}")
     assert (module.__doc__ or "").strip(), f"{name} has no module docstring"
     for fname, obj in vars(module).items():
         if fname.startswith("_") or not inspect.isfunction(obj) or obj.__module__ != module.__name__:

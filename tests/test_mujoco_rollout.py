@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import cobra_ref as cr
-from cobra_ref import mujoco_rollout as mr
+from cobra_ref.reproduce import mujoco_check as mr
 from cobra_ref.gaits import gait
 from cobra_ref.simulate import initial_state, simulate
 
@@ -143,7 +143,7 @@ def test_bad_mode_and_mismatched_layout_are_refused(cobra, cobra_robot):
 
 def test_public_functions_name_what_they_implement():
     """STYLE.md C4, as tests/test_docstrings_cite.py checks the physics modules."""
-    module = importlib.import_module("cobra_ref.mujoco_rollout")
+    module = importlib.import_module("cobra_ref.reproduce.mujoco_check")
     for fname, obj in vars(module).items():
         if fname.startswith("_") or not inspect.isfunction(obj) or obj.__module__ != module.__name__:
             continue

@@ -16,8 +16,10 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 import pytest
 
-from cobra_ref import shooting as sh
-from cobra_ref.cli_optimize import add_parsers, cmd_simulate_params, params_reference
+from cobra_ref import planning as sh
+from cobra_ref.cli.optimize import add_parsers
+from cobra_ref.cli.simulate import cmd_simulate_params
+from cobra_ref.planning.results import params_reference
 
 GOAL = (0.05, -0.01)
 
@@ -273,7 +275,7 @@ def test_optimize_cli_writes_the_json_and_one_json_line(tmp_path, capsys, monkey
             self.done = True
             return super().submit(fn, *args, **kwargs)
 
-    monkeypatch.setattr("cobra_ref.cli_optimize.SerialExecutor", Interrupt)
+    monkeypatch.setattr("cobra_ref.cli.optimize.SerialExecutor", Interrupt)
     assert run_cli(argv + ["--maxiter", "2"]) == 130
     assert json.loads(out.read_text())["interrupted"] is True
     assert "INTERRUPTED" in capsys.readouterr().err
@@ -294,7 +296,7 @@ def test_optimization_figure_replays_each_optimum_once(params_file, tmp_path, mo
     then read from the cache (a second call must not simulate: replay is made to fail)."""
     import shutil
 
-    from cobra_ref import regenerate
+    from cobra_ref.reproduce import regenerate
 
     directory, out, cache = tmp_path / "optimized", tmp_path / "out", tmp_path / "cache"
     directory.mkdir()
@@ -336,9 +338,9 @@ def test_with_the_pd_servo_the_optimum_respects_the_torque_and_joint_limits_at_e
 def test_figures_reoptimize_writes_one_params_json_per_gait_and_direction(tmp_path, monkeypatch):
     """``cobra-ref figures --reoptimize`` runs ``regenerate.reoptimize``: one optimization per gait
     and per direction goal, each written as a params JSON that replays (tiny settings here)."""
-    from cobra_ref import regenerate
+    from cobra_ref.reproduce import regenerate
 
-    monkeypatch.setattr(sh, "DEFAULTS", {"C": (GOAL, 0.3, 1)})
+    monkeypatch.setattr("cobra_ref.planning.search.DEFAULTS", {"C": (GOAL, 0.3, 1)})
     monkeypatch.setattr(regenerate, "DIRECTIONS", {"right": ("C", (0.05, -0.02))})
     files = regenerate.reoptimize(str(tmp_path), gaits=("C",), progress=False)
     assert sorted(files) == ["C", "direction-right"]

@@ -6,7 +6,7 @@ import pytest
 from cobra_ref.gaits import RollingGait
 from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import initial_state, simulate
-from cobra_ref.stepper import SimulationError, StepSettings, Stepper
+from cobra_ref.fast.stepper import SimulationError, StepSettings, Stepper
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""The time stepper (cobra_ref.stepper) on the smallest models: a ball and a box on the ground.
+"""The time stepper (cobra_ref.fast.stepper) on the smallest models: a ball and a box on the ground.
 
 One step of [COBRA] eq. (1) with the impulses of eq. (5)-(6) (semi-implicit Euler)::
 
@@ -23,10 +23,10 @@ REG = 1e-6 (P = G + REG mean(diag G) I, contact_qp module docstring).
 import numpy as np
 import pytest
 
-from cobra_ref.fastdyn import ChainModel
+from cobra_ref.fast.chain import ChainModel
 from cobra_ref.model import BoxGeom, Model, SphereSet
 from cobra_ref.simulate import simulate
-from cobra_ref.stepper import StepSettings, Stepper
+from cobra_ref.fast.stepper import StepSettings, Stepper
 
 GRAVITY = 9.81  # [m/s^2]
 DT = 1e-3  # [s]

@@ -15,9 +15,11 @@ def test_there_are_tutorials():
 
 @pytest.mark.parametrize("path", TUTORIALS, ids=lambda p: p.name)
 def test_tutorial_runs(path, tmp_path, monkeypatch):
-    """Run in a temporary directory with the Agg backend; plt.show() is then a no-op."""
+    """Run in a temporary directory with the Agg backend (plt.show() is then a no-op); pictures go
+    to that directory too, nothing into the repository."""
     matplotlib.use("Agg")
     monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("COBRA_REF_OUT", str(tmp_path))
     runpy.run_path(str(path), run_name="__main__")
     import matplotlib.pyplot as plt
 

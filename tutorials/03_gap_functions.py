@@ -17,8 +17,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import cobra_ref as cr
-from cobra_ref.contact import KINDS, ROBOT_BOX, contact_jacobian, find_contacts
-from cobra_ref.fastdyn import ChainModel
+from cobra_ref.fast.contacts import KINDS, ROBOT_BOX, contact_jacobian, find_contacts
+from cobra_ref.fast.chain import ChainModel
 from cobra_ref.gaps import box_corner_plane_gaps, box_corners, sphere_box_gap, sphere_plane_gap
 from cobra_ref.quaternion import rot_to_quat
 from cobra_ref.gaits import RollingGait

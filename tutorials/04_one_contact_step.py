@@ -14,12 +14,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import cobra_ref as cr
-from cobra_ref.contact import KINDS, ROBOT_BOX, contact_jacobian, find_contacts
-from cobra_ref.contact_qp import ContactQP, facet_directions, kkt_residuals
-from cobra_ref.fastdyn import ChainModel
+from cobra_ref.fast.contacts import KINDS, ROBOT_BOX, contact_jacobian, find_contacts
+from cobra_ref.fast.contact_qp import ContactQP, facet_directions, kkt_residuals
+from cobra_ref.fast.chain import ChainModel
 from cobra_ref.gaits import RollingGait
 from cobra_ref.simulate import initial_state
-from cobra_ref.stepper import Stepper
+from cobra_ref.fast.stepper import Stepper
 
 np.set_printoptions(precision=5, suppress=True)
 

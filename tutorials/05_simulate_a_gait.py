@@ -10,6 +10,9 @@
 # **Run:** `python tutorials/05_simulate_a_gait.py` (about 10 s; it writes `05_contacts.png`).
 
 # %%
+import os
+import pathlib
+
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -17,6 +20,10 @@ from cobra_ref import analysis
 from cobra_ref.gaits import gait
 from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import initial_state, simulate
+
+# pictures go to an ignored folder beside the tutorials (or to $COBRA_REF_OUT)
+OUT = pathlib.Path(os.environ.get("COBRA_REF_OUT", pathlib.Path(__file__).resolve().parent / "out"))
+OUT.mkdir(parents=True, exist_ok=True)
 
 np.set_printoptions(precision=4, suppress=True)
 
@@ -118,7 +125,7 @@ ax[2].set_ylabel("power [W]")
 ax[2].set_xlabel("time [s]")
 ax[2].legend()
 fig.tight_layout()
-fig.savefig("05_contacts.png", dpi=120)
+fig.savefig(OUT / "05_contacts.png", dpi=120)
 plt.show()
 
 # %% [markdown]

@@ -9,12 +9,19 @@
 # and `06_shooting_cobra.png` in the current directory).
 
 # %%
+import os
+import pathlib
+
 import matplotlib.pyplot as plt
 import numpy as np
 
-from cobra_ref import shooting as sh
+from cobra_ref import planning as sh
 from cobra_ref.kinematics import forward_kinematics
 from cobra_ref.robots import cobra_model
+
+# pictures go to an ignored folder beside the tutorials (or to $COBRA_REF_OUT)
+OUT = pathlib.Path(os.environ.get("COBRA_REF_OUT", pathlib.Path(__file__).resolve().parent / "out"))
+OUT.mkdir(parents=True, exist_ok=True)
 
 np.set_printoptions(precision=4, suppress=True)
 
@@ -136,7 +143,7 @@ ax.axvline(gap0, color="w", ls=":", lw=1)
 ax.set(xlabel="stroke amplitude A [m]", ylabel="frequency f [Hz]", title="toy shooting cost J(A, f)")
 ax.legend(loc="upper right", fontsize=8)
 fig.tight_layout()
-fig.savefig("06_shooting_landscape.png", dpi=120)
+fig.savefig(OUT / "06_shooting_landscape.png", dpi=120)
 
 # %% [markdown]
 # ## 4. The real problem: COBRA pushes the box
@@ -195,7 +202,7 @@ axes[1].set(xlim=(bx - 0.1, bx + 0.1), ylim=(by - 0.1, by + 0.1), title="box aft
 for ax in axes:
     ax.legend(fontsize=7)
 fig.tight_layout()
-fig.savefig("06_shooting_cobra.png", dpi=120)
+fig.savefig(OUT / "06_shooting_cobra.png", dpi=120)
 
 # %% [markdown]
 # ## 6. Running the real optimization

@@ -24,9 +24,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .model import Model, ModelError
-from .quaternion import quat_to_rot
-from .spatial import cross_rows, skew, skew_rows
+from ..model import Model, ModelError
+from ..quaternion import quat_to_rot
+from ..spatial import cross_rows, skew, skew_rows
 
 _AXIS = {"Rx": 0, "Ry": 1, "Rz": 2}
 

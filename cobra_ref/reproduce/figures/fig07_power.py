@@ -13,7 +13,7 @@ each panel's corner.
 
 from __future__ import annotations
 
-from ..analysis import locomotion_power
+from ...analysis import locomotion_power
 from . import common
 
 

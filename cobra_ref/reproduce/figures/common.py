@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from ..atomic import atomic_write  # noqa: E402
+from ...output import atomic_write  # noqa: E402
 
 ONE_COLUMN, TWO_COLUMN = 3.5, 7.0  # figure widths [in]
 DPI = 150
@@ -207,8 +207,8 @@ def main(make, argv=None) -> list[str]:
     Helper: ``python -m cobra_ref.figures.<module> [--out figures] [--cache .cobra_cache]
     [--duration 1.0] [--gaits C S ...]``; prints the paths written.
     """
-    from ..reproduce import PAPER_GAITS, RunSpec, run_all
-    from ..robots import cobra_model
+    from ..runs import PAPER_GAITS, RunSpec, run_all
+    from ...robots import cobra_model
 
     doc = (sys.modules[make.__module__].__doc__ or make.__doc__ or "").strip()
     parser = argparse.ArgumentParser(description=doc.splitlines()[0] if doc else None)

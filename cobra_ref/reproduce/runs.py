@@ -33,19 +33,17 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from . import __version__
-from .gaits import gait, gait_params
-from .parallel import worker_init
-from .params import CobraParameters
-from .progress import progress_printer
-from .robots import cobra_model
-from .simulate import Trajectory, initial_state, simulate
-from .stepper import SimulationError, StepSettings
+from .. import __version__
+from ..gaits import gait, gait_params
+from ..executors import worker_init
+from ..params import CobraParameters
+from ..progress import progress_printer
+from ..robots import cobra_model
+from ..simulate import Trajectory, initial_state, simulate
+from ..fast.stepper import SimulationError, StepSettings
 
 PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
-# the modules whose source decides a simulation's result (part of the cache key)
-PHYSICS_MODULES = ("params", "spatial", "quaternion", "joints", "model", "robots", "kinematics", "fastdyn",
-                   "gaps", "contact", "contact_qp", "active_set", "stepper", "simulate", "gaits", "reproduce")
+
 
 
 @dataclass(frozen=True)
@@ -80,14 +78,19 @@ class RunSpec:
 
 
 def physics_hash(extra=()) -> str:
-    """SHA-256 of the source of every module a simulation runs (``PHYSICS_MODULES`` + ``extra``).
+    """SHA-256 of the source of every module a simulation can run: the physics core (the modules
+    at the top of the package) and the fast wing, plus the subpackages named in ``extra``.
 
-    Helper: the code-version part of the cache keys and of the optimizer's params JSON.
+    Helper: the code-version part of the cache keys and of the optimizer's params JSON. The files
+    are found, not listed, so a new physics module cannot be forgotten.
     """
-    here, h = os.path.dirname(os.path.abspath(__file__)), hashlib.sha256()
-    for name in PHYSICS_MODULES + tuple(extra):
-        with open(os.path.join(here, name + ".py"), "rb") as f:
-            h.update(f.read())
+    root, h = os.path.dirname(os.path.dirname(os.path.abspath(__file__))), hashlib.sha256()
+    for folder in ("", "fast") + tuple(extra):
+        directory = os.path.join(root, folder)
+        for name in sorted(os.listdir(directory)):
+            if name.endswith(".py"):
+                with open(os.path.join(directory, name), "rb") as f:
+                    h.update(f"{folder}/{name}".encode() + f.read())
     return h.hexdigest()
 
 
@@ -102,7 +105,7 @@ def travel_direction(spec: RunSpec, periods: float = 2.0) -> np.ndarray:
     duration = min(spec.duration, periods / ref.frequency)
     traj = simulate(model, ref, duration, StepSettings(dt=spec.dt))
     robot = range(model.nb)
-    from .kinematics import forward_kinematics
+    from ..kinematics import forward_kinematics
 
     def com(q):
         kin = forward_kinematics(model, q)

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import analysis
+from .. import analysis
 
 ROLLING = ("C", "S", "J", "J-mirror")
 

@@ -34,8 +34,8 @@ import time
 
 import numpy as np
 
-from .atomic import atomic_write, write_text
-from .reproduce import PAPER_GAITS, RunSpec, run_all
+from ..output import atomic_write, write_text
+from .runs import PAPER_GAITS, RunSpec, run_all
 
 FULL_DURATION, QUICK_DURATION = 10.0, 1.0
 
@@ -83,7 +83,7 @@ def optimized_params(files: dict) -> dict:
 
     Helper: the ``params`` of each optimum (phase-rate ramp included), for ``specs_for``.
     """
-    from .shooting import load_result
+    from ..planning.results import load_result
 
     return {g: dict(load_result(p)["params"]) for g, p in files.items()}
 
@@ -95,7 +95,7 @@ def reoptimize(directory: str, gaits=PAPER_GAITS, progress: bool = True) -> dict
 
     Helper: ``cobra-ref figures --reoptimize``.
     """
-    from .shooting import optimize_gait
+    from ..planning.search import optimize_gait
 
     os.makedirs(directory, exist_ok=True)
     say = (lambda line: _say(True, "    " + line)) if progress else (lambda line: None)
@@ -121,7 +121,7 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
     """
     from . import claims as claims_mod
     from .figures import FIGURES
-    from .robots import cobra_model
+    from ..robots import cobra_model
 
     start = time.perf_counter()
     check_output_dir(out_dir)
@@ -185,7 +185,7 @@ def _mujoco_rows(results, out_dir, progress, files) -> list[dict]:
     """The MuJoCo rollout cross-check (design brief sec. 7) as claims, and its figure; empty, with
     a note on stderr, when mujoco is not installed (it is an optional extra)."""
     from . import claims as claims_mod
-    from .mujoco_rollout import cross_check, mujoco_available
+    from .mujoco_check import cross_check, mujoco_available
 
     if not mujoco_available():
         _say(progress, "  MuJoCo cross-check skipped: mujoco is not installed (pip install mujoco)")
@@ -199,7 +199,7 @@ def _mujoco_rows(results, out_dir, progress, files) -> list[dict]:
     params = {g: r.meta.get("gait_params", {}) for g, r in done.items()}
     t0 = time.perf_counter()
     rows = cross_check(list(done), first.duration, first.dt, ours=ours, box_directions=directions, params=params)
-    from .figures.mujoco_check import make as make_figure
+    from .figures.fig_mujoco_check import make as make_figure
 
     files += make_figure(rows, out_dir)
     _say(progress, f"  MuJoCo cross-check: {len(rows)} gaits, {time.perf_counter() - t0:.1f} s")
@@ -210,7 +210,7 @@ def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, p
     """``fig_optimization`` (one optimum per gait) and ``fig_directions`` (``DIRECTIONS``) from the
     params JSONs in ``directory``; each optimum is replayed once and its box path cached."""
     from .figures.fig_optimization import make
-    from .shooting import load_result
+    from ..planning.results import load_result
 
     def runs(names):
         out = []
@@ -228,7 +228,7 @@ def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, p
     if len(paths) > 1:
         from concurrent.futures import ProcessPoolExecutor
 
-        from .parallel import worker_init
+        from ..executors import worker_init
 
         with ProcessPoolExecutor(min(len(paths), os.cpu_count() or 1), initializer=worker_init) as pool:
             list(pool.map(_replayed_box_path, paths, [cache_dir] * len(paths)))
@@ -248,11 +248,11 @@ def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, p
 def _replayed_box_path(path: str, cache_dir: str) -> np.ndarray:
     """(n, 2) box path of the optimum of the params JSON ``path``, replayed once and cached under a
     hash of the JSON and the physics source."""
-    from .reproduce import physics_hash
-    from .shooting import replay
+    from .runs import physics_hash
+    from ..planning.results import replay
 
     with open(path, "rb") as f:
-        key = hashlib.sha256(f.read() + physics_hash(("shooting",)).encode()).hexdigest()[:16]
+        key = hashlib.sha256(f.read() + physics_hash(("planning",)).encode()).hexdigest()[:16]
     cached = os.path.join(cache_dir, f"optimum-{key}.npy")
     if os.path.isfile(cached):
         return np.load(cached)

@@ -25,14 +25,17 @@ import time
 
 import numpy as np
 
-from .gaits import RollingGait
-from .robots import cobra_model
-from .simulate import initial_state, simulate
-from .stepper import PHASES, StepSettings
+from ..gaits import RollingGait
+from ..robots import cobra_model
+from ..simulate import initial_state, simulate
+from ..fast.stepper import PHASES, StepSettings
 
 
 def run_bench(duration: float = 2.0, dt: float = 1e-3, with_mujoco: bool = True, progress=None) -> dict:
-    """Time the rolling push; return the benchmark record (see the module docstring)."""
+    """Time the rolling push; return the benchmark record (see the module docstring).
+
+    Helper: the benchmark (cobra-ref bench).
+    """
     model = cobra_model()
     reference = RollingGait()
     q0, qd0 = initial_state(model, reference)
@@ -68,12 +71,15 @@ def run_bench(duration: float = 2.0, dt: float = 1e-3, with_mujoco: bool = True,
 
 
 def mujoco_us_per_step(model, reference, q0, n_steps: int, dt: float) -> float | None:
-    """MuJoCo's wall time per mj_step [us] on the exported model, or None without mujoco."""
+    """MuJoCo's wall time per mj_step [us] on the exported model, or None without mujoco.
+
+    Helper: the benchmark (cobra-ref bench).
+    """
     try:
         import mujoco
     except ImportError:
         return None
-    from .mjcf import to_mjcf
+    from ..mjcf import to_mjcf
 
     m = mujoco.MjModel.from_xml_string(to_mjcf(model, timestep=dt))
     d = mujoco.MjData(m)
@@ -89,7 +95,10 @@ def mujoco_us_per_step(model, reference, q0, n_steps: int, dt: float) -> float |
 
 
 def format_table(record: dict) -> str:
-    """The benchmark record as a small text table."""
+    """The benchmark record as a small text table.
+
+    Helper: the benchmark (cobra-ref bench).
+    """
     lines = [f"{record['model']}, {record['steps']} steps"]
     for name, r in (("OSQP every step (default)", record), ("osqp='fallback'", record["osqp_fallback"])):
         lines.append(f"{name:<28}{r['us_per_step']:>10.1f} us/step   real-time factor {r['real_time_factor']}"

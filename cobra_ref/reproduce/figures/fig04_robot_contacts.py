@@ -23,7 +23,7 @@ from matplotlib import colormaps
 from matplotlib.cm import ScalarMappable
 from matplotlib.colors import BoundaryNorm, ListedColormap
 
-from ..analysis import ROBOT_GROUND, contact_forces
+from ...analysis import ROBOT_GROUND, contact_forces
 from . import common
 
 LINK_CMAP = "viridis"

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..analysis import box_work, efficiency_fit, locomotion_work
+from ...analysis import box_work, efficiency_fit, locomotion_work
 from . import common
 
 

@@ -20,8 +20,8 @@ from matplotlib.colors import to_rgba
 from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
-from ..kinematics import forward_kinematics
-from ..quaternion import quat_to_rot
+from ...kinematics import forward_kinematics
+from ...quaternion import quat_to_rot
 from . import common
 
 N_INSTANTS = 4

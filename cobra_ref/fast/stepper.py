@@ -29,11 +29,11 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg import get_lapack_funcs
 
-from .contact import ROBOT_BOX, Contacts, contact_jacobian, find_contacts
+from .contacts import ROBOT_BOX, Contacts, contact_jacobian, find_contacts
 from .contact_qp import ContactQP, QPInfo
-from .fastdyn import ChainModel
-from .quaternion import quat_exp, quat_mul
-from .model import Model
+from .chain import ChainModel
+from ..quaternion import quat_exp, quat_mul
+from ..model import Model
 
 
 # the phases of a step, timed for ``cobra-ref bench``

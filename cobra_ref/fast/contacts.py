@@ -22,9 +22,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import gaps as gapfn
-from .fastdyn import ChainModel, ChainTerms
-from .spatial import skew_rows
+from .. import gaps as gapfn
+from .chain import ChainModel, ChainTerms
+from ..spatial import skew_rows
 
 KINDS = ("robot-ground", "robot-box", "box-ground")
 ROBOT_GROUND, ROBOT_BOX, BOX_GROUND = 0, 1, 2

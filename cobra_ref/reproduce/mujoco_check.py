@@ -52,8 +52,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .mjcf import to_mjcf
-from .model import Model
+from ..mjcf import to_mjcf
+from ..model import Model
 
 MODES = ("kinematic", "position")
 # compare(): the tolerance band, stated before any run (see compare's docstring)
@@ -298,9 +298,9 @@ def cross_check(gait_names, duration: float, dt: float = 1e-3, ours: dict | None
     (or None), the MuJoCo contact / servo stats, wall_time, and the ``compare`` keys when ``ours``
     has the gait.
     """
-    from .gaits import gait
-    from .robots import cobra_model
-    from .simulate import initial_state
+    from ..gaits import gait
+    from ..robots import cobra_model
+    from ..simulate import initial_state
 
     _import_mujoco()
     model = cobra_model() if model is None else model
@@ -310,7 +310,7 @@ def cross_check(gait_names, duration: float, dt: float = 1e-3, ours: dict | None
         reference = gait(name, **(params or {}).get(name, {}))
         direction = box_directions.get(name)
         if direction is None and name == "sidewinding":
-            from .reproduce import RunSpec, travel_direction
+            from .runs import RunSpec, travel_direction
 
             direction = travel_direction(RunSpec("sidewinding", duration, dt))
         q0, qd0 = initial_state(model, reference, box_direction=direction)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from matplotlib.ticker import MaxNLocator
 
-from ..analysis import box_distance
+from ...analysis import box_distance
 from . import common
 
 

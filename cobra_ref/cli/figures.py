@@ -1,0 +1,65 @@
+"""``cobra-ref figures``: every result of the paper (figures 3-9, GIFs, claims) in one command.
+
+Helper: the command-line side of :mod:`cobra_ref.reproduce.regenerate`.
+"""
+
+from __future__ import annotations
+
+import json
+
+from .common import c_stdout_silenced
+
+
+def cmd_figures(args) -> int:
+    """Regenerate figures 3-9, the GIFs and the claims report.
+
+    Helper: the command line (cobra-ref figures).
+    """
+    from ..reproduce.regenerate import OPTIMIZED_DIR, check_output_dir, regenerate
+    from ..reproduce.runs import PAPER_GAITS
+
+    gaits = PAPER_GAITS if args.gaits is None else tuple(g.strip() for g in args.gaits.split(","))
+    unknown = [g for g in gaits if g not in PAPER_GAITS]
+    if unknown:
+        raise SystemExit(f"error: unknown gait(s) {', '.join(unknown)}; gaits: {', '.join(PAPER_GAITS)}")
+    try:
+        check_output_dir(args.out)
+    except OSError as exc:
+        raise SystemExit(f"error: {exc}")
+    with c_stdout_silenced():
+        result = regenerate(args.out, quick=args.quick, force=args.force, cache_dir=args.cache,
+                            workers=args.jobs, mujoco=not args.no_mujoco, progress=not args.quiet, gaits=gaits,
+                            optimized_dir=None if args.defaults else OPTIMIZED_DIR,
+                            reoptimize_all=args.reoptimize)
+    print(json.dumps({"out": args.out, "files": len(result["files"]),
+                      "claims": {c["id"]: c["holds"] for c in result["claims"]},
+                      "seconds": round(result["seconds"], 1)}))
+    return 0
+
+
+def add_parsers(sub) -> None:
+    """The ``figures`` subcommand.
+
+    Helper: the command line (cobra-ref figures).
+    """
+    p = sub.add_parser("figures", help="regenerate the paper's figures 3-9, GIFs and the claims report",
+                       description="Simulate the five gaits (10 s each; 1 s with --quick; with the optimized "
+                                   "parameters of cobra_ref/optimized/ where present) on all cores, or read "
+                                   "them from the cache, and write fig03_snapshots.png ... fig09_box_distance.png "
+                                   "(+ PDF), anim_<gait>.gif, claims.json, claims.md and summary.json to --out. "
+                                   "Prints a one-line JSON summary.")
+    p.add_argument("--out", default="figures", help="output directory (default figures)")
+    p.add_argument("--quick", action="store_true", help="1 s simulations instead of 10 s (for tests)")
+    p.add_argument("--force", action="store_true", help="ignore the cache: simulate and draw everything again")
+    p.add_argument("--cache", default=None, help="simulation cache directory (default OUT/.cache)")
+    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: the number of cores)")
+    p.add_argument("--gaits", default=None, help="comma-separated subset of C,S,J,J-mirror,sidewinding")
+    p.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo rollout cross-check")
+    p.add_argument("--defaults", action="store_true",
+                   help="simulate every gait with its default parameters instead of the optimized ones "
+                        "committed in cobra_ref/optimized/")
+    p.add_argument("--reoptimize", action="store_true",
+                   help="first re-run 'cobra-ref optimize' for every gait and the three direction goals, into "
+                        "OUT/optimized/, and use those")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=cmd_figures)

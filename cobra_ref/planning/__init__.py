@@ -1,0 +1,18 @@
+"""Planning: single shooting over gait parameters ([COBRA] "shooting method to find optimal u_ref").
+
+The wing is read in this order: ``problem`` (decision vector, bounds, goal, the common start, one
+rollout), ``cost`` (the cost of a rollout), ``search`` (compass search or differential evolution,
+run on any executor), ``results`` (the params JSON and its replay).
+"""
+
+from ..executors import SerialExecutor
+from .cost import evaluate, shooting_cost
+from .problem import (DECISION, DEFAULTS, ShootingError, ShootingProblem, make_problem, middle_pose, rollout,
+                      start_state)
+from .results import load_result, problem_from_dict, problem_to_dict, replay, write_result
+from .search import compass_search, differential_evolution_search, optimize, optimize_gait
+
+__all__ = ["DECISION", "DEFAULTS", "SerialExecutor", "ShootingError", "ShootingProblem", "compass_search",
+           "differential_evolution_search", "evaluate", "load_result", "make_problem", "middle_pose", "optimize",
+           "optimize_gait", "problem_from_dict", "problem_to_dict", "replay", "rollout", "shooting_cost",
+           "start_state", "write_result"]

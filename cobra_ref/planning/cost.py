@@ -1,0 +1,76 @@
+"""The cost of one rollout of the shooting problem, and its contact and limit report.
+
+Implements: the cost J(p) of the single-shooting problem (``planning.problem`` states it) and
+the per-rollout record that the search keeps for every candidate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..simulate import Trajectory
+from ..fast.stepper import SimulationError
+from .problem import FAILED_COST, ShootingProblem, rollout
+
+def shooting_cost(problem: ShootingProblem, traj: Trajectory) -> dict:
+    """The cost J of a rollout and its terms (module docstring).
+
+    Implements: DESIGN.md sec. 5 cost, [COBRA] Eq. (6) constraints (2), (3) as exact penalties::
+
+        J = w_e E + w_g (d_T / d_0)^2 + w_tau P_tau + w_q P_q
+    """
+    cp, w, T, dt = problem.cobra_parameters(), problem.weights, problem.duration, traj.dt
+    # E = integral ||tau||^2 dt / (n tau_max^2 T)
+    effort = dt * float(np.sum(traj.tau**2)) / (traj.tau.shape[1] * cp.tau_max**2 * T)
+    # d_T = |p_box(T) - p_goal|, d_0 = |goal|
+    d_T = float(np.linalg.norm(traj.box_pose[-1, :2] - problem.goal_world))
+    goal = (d_T / float(np.hypot(*problem.goal))) ** 2
+    # P = integral max(0, excess) dt / (limit T), excess = max_i |.| - limit per step
+    p_tau = dt * float(np.sum(np.maximum(traj.steps["tau_excess"], 0.0))) / (cp.tau_max * T)
+    p_q = dt * float(np.sum(np.maximum(traj.steps["q_excess"], 0.0))) / (cp.q_max * T)
+    cost = w.effort * effort + w.goal * goal + w.tau * p_tau + w.q * p_q
+    return {"cost": cost, "box_distance_to_goal": d_T,
+            "terms": {"effort": effort, "goal": goal, "tau_limit": p_tau, "q_limit": p_q}}
+
+
+def contact_report(traj: Trajectory, tau_max: float) -> dict:
+    """How well every step's contact impulses met the QP's conditions, and the limits' record.
+
+    Implements: the paper's "f_ext orthogonal to the gap functions and their derivative": the
+    KKT conditions of eq. (6) per step (``contact_qp.kkt_residuals``): complementarity
+    max_i |p_N,i w_N,i| [N s m/s] and the relative friction-cone violation, maxima over the
+    rollout; plus the torque and joint-limit excess (``tau_excess``, ``q_excess``).
+    """
+    s = traj.steps
+    n = max(len(traj.tau), 1)
+    return {"max_complementarity": float(np.max(s["complementarity"], initial=0.0)),
+            "max_cone_residual": float(np.max(s["cone_residual"], initial=0.0)),
+            "max_penetration": float(np.max(s["max_penetration"], initial=0.0)),
+            "steps_not_solved": int(np.sum(s["osqp_status"] != 1)),
+            "max_tau_excess": float(np.max(s["tau_excess"], initial=-np.inf)),
+            "steps_over_tau_max": int(np.sum(s["tau_excess"] > 0)),
+            "fraction_over_tau_max": float(np.sum(s["tau_excess"] > 0)) / n,
+            "rms_tau_over_tau_max": float(np.sqrt(np.mean(traj.tau**2))) / tau_max if len(traj.tau) else 0.0,
+            "max_q_excess": float(np.max(s["q_excess"], initial=-np.inf))}
+
+
+def evaluate(problem: ShootingProblem, x) -> dict:
+    """One rollout's history entry: params, cost, box_distance_to_goal, the cost terms, the final
+    box position, the contact and limit report, and the error if the simulation failed.
+
+    Helper: what the executor runs (a module-level function: picklable for a process pool).
+    """
+    entry = {"params": {n: float(v) for n, v in zip(problem.names, x)}, "error": None}
+    try:
+        traj = rollout(problem, x)
+    except SimulationError as exc:
+        traj = exc.trajectory
+        entry["error"] = str(exc)
+    if traj is None or entry["error"]:
+        entry.update(cost=FAILED_COST, box_distance_to_goal=None, terms=None)
+    else:
+        entry.update(shooting_cost(problem, traj))
+    if traj is not None:
+        entry["box_final"] = [float(v) for v in traj.box_pose[-1, :2]]
+        entry["contact"] = contact_report(traj, problem.cobra_parameters().tau_max)
+    return entry

@@ -1,0 +1,325 @@
+"""The single-shooting problem: decision vector, bounds, goal, the common initial state, one rollout.
+
+Implements: [COBRA] sec. "Results": "We take the shooting method to find optimal u_ref for
+minimized joint torques tau such that generalized contact forces f_ext stand orthogonal to gap
+functions and their derivative" and "the goal is to move the box on the flat ground towards a
+specified point" (Eq. (6) constraints (2), (3) as penalties).
+
+The problem (``ShootingProblem``)::
+
+    p = a gait family's parameters (below), bounded: lower <= p <= upper
+    one rollout: simulate(p) over [0, T] from the common initial state (below)
+    J(p) = w_e * E + w_g * (d_T / d_0)^2 + w_tau * P_tau + w_q * P_q
+
+    E     = 1 / (n tau_max^2 T) * integral ||tau||^2 dt        effort: mean squared joint torque
+                                                               as a fraction of the stall torque^2
+    d_T   = || p_box(T) - p_goal ||,  d_0 = || p_box(0) - p_goal ||   (horizontal, box centre)
+    P_tau = 1 / (tau_max T) * integral max(0, max_i |tau_i| - tau_max) dt    (tau_excess per step)
+    P_q   = 1 / (q_max T)   * integral max(0, max_i |q_i| - q_max) dt        (q_excess per step)
+
+Every term is dimensionless. The limit penalties are exact (L1) penalties, linear in the excess:
+with the prescribed servo the joint torques of an impact step reach 5-10 tau_max for one step
+(the impulse that the prescribed joints must absorb, see ``stepper``), and a squared penalty
+would let those few steps dominate while barely seeing a sustained small excess. With
+prescribed joints |q| <= amplitude <= q_max by construction (``gaits``), so P_q is zero unless
+the PD servo is used; it is kept for completeness. A rollout whose simulation fails costs
+``FAILED_COST`` (and its history entry names the error).
+
+Decision vectors (``DECISION``; phase phi_0 and the ramp are fixed, see below):
+
+    C, S:          amplitude [0.25, 0.75] rad, frequency [0.25, 1.0] Hz
+    J, J-mirror:   amplitude, frequency, s_J [0.3, 0.8]   (the hook's length; the side is the gait)
+    sidewinding:   amplitude_yaw, amplitude_pitch [0.4, 0.8] rad, frequency [0.3, 0.7] Hz
+
+The initial guess is the gait's default (notes C10), with phi_0 = 0 (the planar start shape).
+Left out on purpose: the rolling phase phi_0 (a nonzero phi_0 starts from a twisted shape that
+``initial_state`` turns onto its flattest side, so it mostly starts the same roll at another point
+of the cycle; not measured), sidewinding's spatial frequency and delta (they change the shape and
+the direction of travel). Sidewinding's bounds are narrow because its direction of travel also
+depends on amplitude and frequency (measured: at 1 Hz the robot travels 2.5 m in 3 s and misses
+the box placed for 0.5 Hz), and the box is placed once, for the initial guess.
+The frequency stays <= 1 Hz so that the joint speed A omega <= 0.75 * 2 pi = 4.7 rad/s stays
+near the servo's 3.77 rad/s (not penalised: the servo speed is not a constraint of Eq. (6)).
+The phase-rate ramp is shortened to ``RAMP_TIME`` = 0.25 s (the gaits' default, one period,
+would take most of a short horizon).
+
+The common initial state (``start_state``): the box is placed once, by the rule of
+``reproduce`` (5 cm from the middle link on the concave side of the initial guess's start shape;
+for sidewinding in the direction the initial guess travels), and kept there for every rollout.
+Each candidate starts at rest in its own t = 0 shape (the prescribed joints must start on their
+reference), moved rigidly in the plane so that its middle (the midpoint of the centres of mass
+of L5 and L6, and the heading from L6 to L5) is where the initial guess's middle is: the box
+then faces the same link across the same gap whatever the amplitude.
+
+The goal is given relative to the box's start: ``goal`` = (dx, dy) [m] in world axes (x = the
+robot's initial heading, y = its left). It is rejected if not finite, shorter than 1 mm, or
+unreachable: farther than ``MAX_BOX_SPEED`` * T (0.5 m/s; the fastest gait in the bounds, lateral
+rolling at 1 Hz, rolls a link's circumference 2 pi r = 0.34 m per period) or than 5 m.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from ..gaits import GaitError, gait, gait_params
+from ..kinematics import forward_kinematics
+from ..params import CobraParameters
+from ..quaternion import quat_mul
+from ..robots import cobra_model
+from ..simulate import Trajectory, initial_state, simulate
+from ..fast.stepper import SimulationError, StepSettings
+
+ROLLING_DECISION = (("amplitude", 0.25, 0.75), ("frequency", 0.25, 1.0))
+DECISION = {  # gait -> ((parameter, lower, upper), ...)  (module docstring)
+    "C": ROLLING_DECISION,
+    "S": ROLLING_DECISION,
+    "J": ROLLING_DECISION + (("s_J", 0.3, 0.8),),
+    "J-mirror": ROLLING_DECISION + (("s_J", 0.3, 0.8),),
+    "sidewinding": (("amplitude_yaw", 0.4, 0.8), ("amplitude_pitch", 0.4, 0.8), ("frequency", 0.3, 0.7)),
+}
+# gait -> (goal (dx, dy) [m], horizon T [s], maxiter) of ``optimize_gait`` and ``cobra-ref optimize``:
+# the goal is about 1.5 times as far as the initial guess pushes the box in T, in the direction it pushes
+# it (measured: C (0.13, -0.07), S (0.12, -0.11), J (0.22, -0.02), J-mirror (0.20, 0.02) in 1.5 s;
+# sidewinding (-0.10, -0.07) in 3 s: it reaches the box only after about 2.5 s, hence its longer T).
+# Measured on the shared 2-core machine: C 163 s (22 rollouts), sidewinding 79 s at maxiter 4.
+DEFAULTS = {"C": ((0.2, -0.1), 1.5, 6), "S": ((0.17, -0.16), 1.5, 6), "J": ((0.3, -0.02), 1.5, 6),
+            "J-mirror": ((0.3, 0.02), 1.5, 6), "sidewinding": ((-0.15, -0.1), 3.0, 6)}
+RAMP_TIME = 0.25  # [s] phase-rate ramp of every candidate (module docstring)
+DEFAULT_DURATION = 1.5  # [s] horizon T (rolling gaits, see DEFAULTS)
+DEFAULT_MAXITER = 6  # iterations (polls of the compass search, generations of DE)
+MAX_BOX_SPEED = 0.5  # [m/s] reachability bound (module docstring)
+MAX_GOAL_DISTANCE = 5.0  # [m]
+MIN_GOAL_DISTANCE = 1e-3  # [m]
+FAILED_COST = 1e3  # cost of a rollout whose simulation failed
+FORMAT = "cobra-ref optimize v1"
+
+
+class ShootingError(ValueError):
+    """Bad input to the shooting problem or a malformed params JSON (the message says which)."""
+
+
+@dataclass(frozen=True)
+class Weights:
+    """Weights of the cost terms (module docstring): J = effort E + goal (d_T/d_0)^2 + penalties.
+
+    Helper: the defaults make the goal term dominate until the box is within about 10 % of the
+    start distance (10 * 0.1^2 = 0.1, the effort E of the default rolling gaits is 0.09-0.13);
+    a sustained 10 % torque excess costs as much (P_tau = 0.1).
+    """
+
+    effort: float = 1.0
+    goal: float = 10.0
+    tau: float = 1.0
+    q: float = 1.0
+
+
+@dataclass(frozen=True)
+class ShootingProblem:
+    """Everything a rollout needs, picklable (plain numbers and tuples): see the module docstring.
+
+    Helper: built by ``make_problem`` (which checks the input) or ``problem_from_dict`` (JSON).
+    """
+
+    gait: str
+    goal: tuple  # (dx, dy) [m] from the box's start, world axes
+    duration: float
+    dt: float
+    names: tuple  # decision parameters
+    lower: tuple
+    upper: tuple
+    x0: tuple  # initial guess
+    fixed: tuple  # ((name, value), ...) gait parameters held fixed (ramp_time, phase, ...)
+    weights: Weights
+    box_pose0: tuple  # (x, y, z, qw, qx, qy, qz) of the box at t = 0, the same for every rollout
+    middle_pose0: tuple  # (x, y, heading) of the robot's middle at t = 0
+    box_direction: tuple | None  # sidewinding: the direction the box was placed in
+    cobra: tuple = field(default=())  # ((name, value), ...) of CobraParameters
+    servo: str = "prescribed"  # the joint servo of every rollout (StepSettings.servo)
+
+    @property
+    def goal_world(self) -> np.ndarray:
+        return np.asarray(self.box_pose0[:2]) + np.asarray(self.goal)
+
+    def params(self, x) -> dict:
+        """The gait parameters of decision vector x (fixed ones included), as plain floats."""
+        return {**dict(self.fixed), **{n: float(v) for n, v in zip(self.names, x)}}
+
+    def reference(self, x):
+        return gait(self.gait, **self.params(x))
+
+    def settings(self) -> StepSettings:
+        return StepSettings(dt=self.dt, servo=self.servo)
+
+    def cobra_parameters(self) -> CobraParameters:
+        return CobraParameters(**{k: tuple(v) if isinstance(v, list) else v for k, v in self.cobra})
+
+
+def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, dt: float = 1e-3, bounds=None,
+                 x0=None, decision=None, ramp_time: float = RAMP_TIME, weights: Weights = Weights(),
+                 cobra: CobraParameters | None = None, box_gap: float = 0.05,
+                 servo: str = "prescribed") -> ShootingProblem:
+    """Check the input and build the problem: bounds, initial guess, the common box placement.
+
+    Helper: the input side of the shooting method (module docstring). ``bounds`` = {name: (lo, hi)}
+    replaces or adds bounds (default ``DECISION[gait]``); ``decision`` = the names to optimise
+    (default: every bounded one), the other gait parameters stay at the initial guess;
+    ``x0`` = {name: value} overrides the initial guess (default: the gait's defaults, with
+    phase 0 and ``ramp_time``); ``box_gap`` = the gap between the box and the middle link at the
+    start (``simulate.initial_state``, assumption C9: 5 cm); ``servo`` = "prescribed" (the paper's
+    "motion provided": joints follow the reference exactly, torques recovered, impact spikes above
+    tau_max reported and penalised) or "pd" (torques saturated at tau_max, so the torque limit holds
+    at every step by construction; the joints then lag the reference). Raises ``ShootingError`` for an
+    unknown gait, a goal that is not two finite numbers or is unreachable, bounds that are empty
+    or exclude the initial guess, or values the gait rejects. Sidewinding runs one box-free simulation
+    (``reproduce.travel_direction``) to place the box.
+    """
+    if gait_name not in DECISION:
+        raise ShootingError(f"unknown gait {gait_name!r}; gaits: {', '.join(DECISION)}")
+    if servo not in ("prescribed", "pd"):
+        raise ShootingError(f"servo must be 'prescribed' or 'pd', got {servo!r}")
+    if not (np.isfinite(duration) and duration > 0):
+        raise ShootingError(f"duration must be positive and finite, got {duration}")
+    if not (np.isfinite(dt) and 0 < dt <= duration):
+        raise ShootingError(f"dt must be positive, finite and <= duration, got {dt}")
+    goal = check_goal(goal, duration)
+    names, lower, upper = _decision(gait_name, bounds, decision)
+    guess = _initial_guess(gait_name, names, lower, upper, x0, ramp_time)
+    x_guess = tuple(guess.pop(n) for n in names)
+    cobra = cobra or CobraParameters()
+    ref = gait(gait_name, **guess, **dict(zip(names, x_guess)))
+    if not (np.isfinite(box_gap) and box_gap >= 0):
+        raise ShootingError(f"box_gap must be finite and >= 0, got {box_gap}")
+    box_pose0, middle0, direction = _box_placement(gait_name, ref, duration, dt, cobra, box_gap)
+    return ShootingProblem(gait_name, goal, float(duration), float(dt), names, lower, upper, x_guess,
+                           tuple(sorted(guess.items())), weights, box_pose0, middle0, direction,
+                           tuple(asdict(cobra).items()), servo)
+
+
+def check_goal(goal, duration: float) -> tuple:
+    """The goal as (dx, dy) floats, or a ShootingError: not two finite numbers, closer than 1 mm,
+    or unreachable (farther than MAX_BOX_SPEED * duration or MAX_GOAL_DISTANCE).
+
+    Helper: the goal's input check (module docstring).
+    """
+    try:
+        g = np.asarray(goal, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ShootingError(f"goal must be two numbers (dx, dy) in metres, got {goal!r}") from None
+    if g.shape != (2,) or not np.all(np.isfinite(g)):
+        raise ShootingError(f"goal must be two finite numbers (dx, dy) in metres, got {goal!r}")
+    d, reach = float(np.hypot(*g)), min(MAX_BOX_SPEED * duration, MAX_GOAL_DISTANCE)
+    if d < MIN_GOAL_DISTANCE:
+        raise ShootingError(f"goal {tuple(g)} is where the box starts (closer than {MIN_GOAL_DISTANCE} m)")
+    if d > reach:
+        raise ShootingError(f"goal {tuple(g)} is unreachable: {d:.3f} m from the box's start, but in "
+                            f"{duration} s the robot can push it at most {reach:.3f} m "
+                            f"({MAX_BOX_SPEED} m/s, at most {MAX_GOAL_DISTANCE} m); "
+                            "use a closer goal or a longer --duration")
+    return float(g[0]), float(g[1])
+
+
+def _decision(gait_name: str, bounds, decision) -> tuple:
+    """names, lower, upper: DECISION[gait] updated by ``bounds`` = {name: (lo, hi)}, restricted to
+    ``decision`` (names) if given."""
+    table = {n: (lo, hi) for n, lo, hi in DECISION[gait_name]}
+    for name, pair in (bounds or {}).items():
+        try:
+            lo, hi = (float(v) for v in pair)
+        except (TypeError, ValueError):
+            raise ShootingError(f"bounds for {name!r} must be two numbers (lo, hi), got {pair!r}") from None
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            raise ShootingError(f"bounds for {name!r} must be finite with lo < hi, got ({lo}, {hi})")
+        table[str(name)] = (lo, hi)
+    names = tuple(table) if decision is None else tuple(str(n) for n in decision)
+    if not names or len(set(names)) != len(names):
+        raise ShootingError(f"the decision vector must name distinct parameters, got {names}")
+    missing = [n for n in names if n not in table]
+    if missing:
+        raise ShootingError(f"no bounds for decision parameter(s) {', '.join(missing)}: pass them in bounds")
+    return names, tuple(table[n][0] for n in names), tuple(table[n][1] for n in names)
+
+
+def _initial_guess(gait_name, names, lower, upper, x0, ramp_time) -> dict:
+    """Every free gait parameter's initial value (defaults, phase 0, ramp_time, then x0), checked."""
+    try:
+        guess = gait_params(gait(gait_name, phase=0.0, ramp_time=float(ramp_time)))
+        for k, v in (x0 or {}).items():
+            guess[str(k)] = float(v)
+        gait(gait_name, **guess)
+        for n in names:
+            if n not in guess:
+                raise GaitError(f"{n!r} is not a parameter of gait {gait_name!r}; use {', '.join(guess)}")
+        for corner in (lower, upper):  # the gait checks each parameter on an interval: corners suffice
+            gait(gait_name, **{**guess, **dict(zip(names, corner))})
+    except (GaitError, TypeError, ValueError) as exc:
+        raise ShootingError(f"bad bounds or initial guess for gait {gait_name!r}: {exc}") from None
+    for n, lo, hi in zip(names, lower, upper):
+        if not lo <= guess[n] <= hi:
+            raise ShootingError(f"the bounds exclude the initial guess: {n} = {guess[n]} is not in [{lo}, {hi}]")
+    return {k: float(v) for k, v in guess.items()}
+
+
+def _box_placement(gait_name, ref, duration, dt, cobra, box_gap):
+    """The common box pose, the initial guess's middle pose and (sidewinding) the box direction."""
+    direction = None
+    if gait_name == "sidewinding":
+        from ..reproduce.runs.runs import RunSpec, travel_direction
+
+        spec = RunSpec(gait_name, duration=max(duration, 2.0 / ref.frequency), dt=dt, params=gait_params(ref))
+        try:
+            direction = tuple(float(v) for v in travel_direction(spec))
+        except SimulationError as exc:
+            raise ShootingError(f"cannot place the box for the initial guess: {exc}") from None
+    model = cobra_model(cobra)
+    q0, _ = initial_state(model, ref, box_gap=box_gap, box_direction=direction)
+    box = model.q_idx[model.boxes[0].body]
+    return tuple(float(v) for v in q0[box]), tuple(float(v) for v in middle_pose(model, q0)), direction
+
+
+def middle_pose(model, q) -> np.ndarray:
+    """(x, y, heading) of the robot's middle: the midpoint of the centres of mass of its two middle
+    bodies (L5, L6 for COBRA) and the horizontal direction from the second to the first.
+
+    Helper: the anchor of the common initial state (module docstring).
+    """
+    kin = forward_kinematics(model, q)
+    robot = [i for i in range(model.nb) if all(b.body != i for b in model.boxes)]
+    a, b = robot[len(robot) // 2 - 1], robot[len(robot) // 2]
+    com_a, com_b = (kin.p[i] + kin.R[i] @ model.com[i] for i in (a, b))
+    d = com_a - com_b
+    return np.array([*(0.5 * (com_a + com_b))[:2], np.arctan2(d[1], d[0])])
+
+
+def start_state(problem: ShootingProblem, x, model=None):
+    """(q0, qd0) of the rollout of x: candidate x's start shape at rest, moved in the plane so that
+    its middle is at ``problem.middle_pose0``; the box at ``problem.box_pose0``.
+
+    Helper: the common initial state (module docstring).
+    """
+    model = model or cobra_model(problem.cobra_parameters())
+    q0, qd0 = initial_state(model, problem.reference(x), box_direction=problem.box_direction)
+    now, goal = middle_pose(model, q0), np.asarray(problem.middle_pose0)
+    # planar rigid motion of the robot: p -> Rz(dpsi) (p - m_now) + m_goal, quat -> q_z(dpsi) * quat
+    dpsi = goal[2] - now[2]
+    c, s = np.cos(dpsi), np.sin(dpsi)
+    base = model.q_idx[0].start
+    rel = q0[base:base + 2] - now[:2]
+    q0[base:base + 2] = goal[:2] + np.array([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]])
+    q0[base + 3:base + 7] = quat_mul(np.array([np.cos(dpsi / 2), 0.0, 0.0, np.sin(dpsi / 2)]),
+                                     q0[base + 3:base + 7])
+    box = model.q_idx[model.boxes[0].body]
+    q0[box] = problem.box_pose0
+    return q0, qd0
+
+
+def rollout(problem: ShootingProblem, x, progress=None) -> Trajectory:
+    """One rollout: simulate candidate x over the horizon from the common initial state.
+
+    Implements: the "shooting" of [COBRA] sec. "Results": one simulation per u_ref.
+    Raises ``SimulationError`` as ``simulate`` does.
+    """
+    model = cobra_model(problem.cobra_parameters())
+    q0, qd0 = start_state(problem, x, model)
+    return simulate(model, problem.reference(x), problem.duration, problem.settings(), q0, qd0, progress)

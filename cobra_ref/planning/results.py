@@ -1,0 +1,215 @@
+"""The params JSON of an optimization: the optimum, every rollout, every setting; its replay.
+
+Helper: the output of ``cobra-ref optimize`` and the input of ``cobra-ref simulate --params``
+and of the figures.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import asdict
+from typing import NamedTuple
+
+import numpy as np
+
+from ..output import atomic_write
+from ..gaits import gait
+from ..robots import cobra_model
+from ..simulate import Trajectory
+from .cost import shooting_cost
+from .problem import DECISION, FORMAT, ShootingError, ShootingProblem, Weights, rollout, start_state
+
+def problem_to_dict(problem: ShootingProblem) -> dict:
+    """The problem as JSON-ready settings (every input of a rollout).
+
+    Helper: the ``settings`` part of the params JSON.
+    """
+    return {"gait": problem.gait, "goal": list(problem.goal), "goal_world": [float(v) for v in problem.goal_world],
+            "duration": problem.duration, "dt": problem.dt, "step_settings": asdict(problem.settings()),
+            "decision": {"names": list(problem.names), "lower": list(problem.lower), "upper": list(problem.upper),
+                         "x0": list(problem.x0)},
+            "fixed": dict(problem.fixed), "weights": asdict(problem.weights),
+            "box_pose0": list(problem.box_pose0), "middle_pose0": list(problem.middle_pose0),
+            "box_direction": None if problem.box_direction is None else list(problem.box_direction),
+            "cobra_parameters": {k: list(v) if isinstance(v, tuple) else v for k, v in problem.cobra},
+            "servo": problem.servo}
+
+
+def problem_from_dict(d: dict) -> ShootingProblem:
+    """The problem back from ``problem_to_dict``'s output; ShootingError if malformed.
+
+    Helper: replay of a params JSON.
+    """
+    try:
+        dec = d["decision"]
+        problem = ShootingProblem(
+            str(d["gait"]), _floats(d["goal"], 2), float(d["duration"]), float(d["dt"]), tuple(map(str, dec["names"])),
+            _floats(dec["lower"]), _floats(dec["upper"]), _floats(dec["x0"]),
+            tuple(sorted((str(k), float(v)) for k, v in d["fixed"].items())), Weights(**d["weights"]),
+            _floats(d["box_pose0"], 7), _floats(d["middle_pose0"], 3),
+            None if d["box_direction"] is None else _floats(d["box_direction"], 2),
+            tuple((str(k), tuple(v) if isinstance(v, list) else v) for k, v in d["cobra_parameters"].items()),
+            str(d.get("servo", "prescribed")))
+        problem.reference(problem.x0)
+        problem.settings()
+        problem.cobra_parameters()
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise ShootingError(f"malformed settings in params JSON: {type(exc).__name__}: {exc}") from None
+    if problem.gait not in DECISION or not (len(problem.names) == len(problem.lower) == len(problem.upper)):
+        raise ShootingError(f"malformed settings in params JSON: gait {problem.gait!r} or decision sizes")
+    return problem
+
+
+def _floats(values, n: int | None = None) -> tuple:
+    out = tuple(float(v) for v in values)
+    if (n is not None and len(out) != n) or not all(np.isfinite(out)):
+        raise ValueError(f"expected {n or 'some'} finite numbers, got {values!r}")
+    return out
+
+
+def code_version() -> dict:
+    """The package version and a SHA-256 of the physics modules' source (as ``reproduce`` keys its cache).
+
+    Helper: recorded in the params JSON; `cobra-ref simulate --params` notes a replay on other code.
+    """
+    from .. import __version__
+    from ..reproduce.runs import physics_hash
+
+    return {"version": __version__, "physics_sha256": physics_hash(("planning",))}
+
+
+def result_to_dict(result: ShootingResult) -> dict:
+    """The params JSON: ``params`` (the optimum), ``history``, and every setting to re-run it.
+
+    Helper: the output of ``cobra-ref optimize``.
+    """
+    best = result.best
+    return {"format": FORMAT, "gait": result.problem.gait, "params": result.params,
+            "cost": best["cost"], "box_distance_to_goal": best["box_distance_to_goal"],
+            "terms": best["terms"], "box_final": best.get("box_final"), "contact": best.get("contact"),
+            "interrupted": result.interrupted, "message": result.message,
+            "settings": problem_to_dict(result.problem),
+            "optimizer": {"method": result.method, "seed": result.seed, "maxiter": result.maxiter,
+                          "iterations": result.iterations, "rollouts": len(result.history), **result.options},
+            "code": code_version(), "wall_time": result.wall_time, "history": result.history}
+
+
+def write_result(result: ShootingResult, path: str) -> dict:
+    """Write the params JSON atomically (temporary file + rename); return what was written.
+
+    Helper: ``cobra-ref optimize --out``.
+    """
+    record = result_to_dict(result)
+
+    def write(tmp: str) -> None:
+        with open(tmp, "w") as f:
+            json.dump(record, f, indent=1, allow_nan=False)
+            f.write("\n")
+
+    atomic_write(path, write)
+    return record
+
+
+def load_result(path: str) -> dict:
+    """Read a params JSON with clear errors (missing, not JSON, not ours, malformed settings).
+
+    Helper: ``cobra-ref simulate --params`` and the figures.
+    """
+    if not os.path.isfile(path):
+        raise ShootingError(f"params file not found: {path}")
+    try:
+        with open(path) as f:
+            record = json.load(f)
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ShootingError(f"{path}: not a readable JSON file ({exc})") from None
+    if not isinstance(record, dict) or record.get("format") != FORMAT:
+        raise ShootingError(f"{path}: not a params file of cobra-ref optimize (expected format {FORMAT!r})")
+    for key in ("params", "settings", "cost"):
+        if key not in record:
+            raise ShootingError(f"{path}: malformed params file, missing {key!r}")
+    problem = problem_from_dict(record["settings"])
+    try:
+        record["params"] = {str(k): float(v) for k, v in record["params"].items()}
+        gait(problem.gait, **record["params"])
+    except (AttributeError, TypeError, ValueError) as exc:
+        raise ShootingError(f"{path}: malformed 'params': {exc}") from None
+    record["problem"] = problem
+    return record
+
+
+def decision_vector(problem: ShootingProblem, params: dict) -> tuple:
+    """x for the full gait parameters ``params`` (the decision parameters picked out).
+
+    Helper: replay.
+    """
+    return tuple(float(params[n]) for n in problem.names)
+
+
+def replay(path: str, progress=None) -> tuple[Trajectory, dict]:
+    """Re-run the optimum of a params JSON; return the trajectory and its cost entry.
+
+    Helper: the exact replay (the simulator is deterministic: the cost equals the recorded one).
+    """
+    record = load_result(path)
+    problem = record["problem"]
+    x = decision_vector(problem, record["params"])
+    traj = rollout(problem, x, progress)
+    return traj, shooting_cost(problem, traj)
+
+
+def summary_lines(result: ShootingResult) -> list[str]:
+    """The final summary of an optimization, a few lines of text.
+
+    Helper: printed on stderr by ``cobra-ref optimize``.
+    """
+    p, b, x0 = result.problem, result.best, result.history[0]
+    c = b.get("contact") or {}
+    lines = [f"{'INTERRUPTED: ' if result.interrupted else ''}{result.message}",
+             f"{p.gait}: {len(result.history)} rollouts in {result.wall_time:.0f} s, {result.iterations} iterations",
+             "optimum: " + ", ".join(f"{n} = {b['params'][n]:.4f}" for n in p.names),
+             f"cost {x0['cost']:.5g} (initial guess) -> {b['cost']:.5g}; terms "
+             + ", ".join(f"{k} {v:.4g}" for k, v in (b["terms"] or {}).items())]
+    if b["box_distance_to_goal"] is not None and x0["box_distance_to_goal"] is not None:
+        lines.append(f"box to goal {float(np.hypot(*p.goal)):.4f} m at start, {x0['box_distance_to_goal']:.4f} m "
+                     f"with the initial guess, {b['box_distance_to_goal']:.4f} m at the optimum")
+    if c:
+        lines.append(f"contact conditions over the rollout: max complementarity {c['max_complementarity']:.2e} "
+                     f"N s m/s, max cone residual {c['max_cone_residual']:.2e}, {c['steps_not_solved']} steps "
+                     f"not 'solved'; torque over tau_max in {c['steps_over_tau_max']} steps "
+                     f"(max excess {c['max_tau_excess']:.2f} N m), max |q| - q_max {c['max_q_excess']:.3f} rad")
+    return lines
+
+
+class ParamsRun(NamedTuple):
+    """What ``cobra-ref simulate --params FILE`` needs to replay an optimum exactly."""
+
+    gait: str
+    reference: object  # the optimal gait: gait(gait, **params)
+    settings: object  # StepSettings of the optimization
+    duration: float  # the optimization's horizon, or the override
+    q0: np.ndarray  # the common initial state of the optimization
+    qd0: np.ndarray
+    model: object  # cobra_model with the recorded CobraParameters
+    problem: ShootingProblem
+    recorded_cost: float
+    same_code: bool = True  # the physics modules' SHA-256 equals the one the optimum was found with
+
+
+def params_reference(path: str, duration: float | None = None) -> ParamsRun:
+    """Read a params JSON and return everything to replay its optimum with ``simulate``.
+
+    Helper: ``cobra-ref simulate --params``. ``duration`` None = the optimization's horizon (then
+    ``params_summary`` checks that the replayed cost equals the recorded one). Raises
+    ``ShootingError`` for a missing or malformed file.
+    """
+    record = load_result(path)
+    problem: ShootingProblem = record["problem"]
+    if duration is not None and not (np.isfinite(duration) and duration > 0):
+        raise ShootingError(f"duration must be positive and finite, got {duration}")
+    x = decision_vector(problem, record["params"])
+    model = cobra_model(problem.cobra_parameters())
+    q0, qd0 = start_state(problem, x, model)
+    return ParamsRun(problem.gait, problem.reference(x), problem.settings(),
+                     problem.duration if duration is None else float(duration), q0, qd0, model, problem,
+                     float(record["cost"]), record.get("code", {}).get("physics_sha256") == code_version()["physics_sha256"])
