@@ -136,6 +136,24 @@ def efficiency_slope(traj) -> float:
     return efficiency_fit(traj)[0]
 
 
+def impacts(traj) -> dict:
+    """The run's impacts: contacts that start carrying load while approaching (assumption A26).
+
+    Implements: the paper's non-impulsive condition as numbers. A contact's onset is its first
+    step with a normal impulse; its approach speed v_a = max(0, -g') is the gap's closing rate
+    just before (eq. (4) on the normal row), and it is an impact when v_a > 1 cm/s. Per impact,
+    the impulse that stops the approach is m v_a and the energy it takes out 1/2 m v_a^2, with
+    m = 1 / G_NN the mass the contact sees (the Delassus matrix, eq. (5)). Returns impacts per
+    second, the total impact impulse [N s] and energy [J], and the largest approach speed [m/s].
+    """
+    s, duration = traj.steps, max(float(traj.t[-1] - traj.t[0]), 1e-300) if len(traj.t) else 1e-300
+    speed = traj.contacts["contact_onset_speed"]
+    return {"impacts_per_second": float(np.sum(s["impact_count"])) / duration,
+            "impact_impulse": float(np.sum(s["impact_impulse"])),
+            "impact_energy": float(np.sum(s["impact_energy"])),
+            "max_approach_speed": float(np.max(speed, initial=0.0))}
+
+
 class ContactForces(NamedTuple):
     """Per step and per body, the summed normal and tangential contact force magnitudes [N]."""
 
@@ -183,10 +201,12 @@ def summary(traj) -> dict:
         "box_distance": float(np.linalg.norm(d)),
         "robot_box_steps": int(len(np.unique(traj.contacts["contact_step"][traj.contacts["contact_kind"] == ROBOT_BOX]))),
         "max_tau_excess": float(traj.steps["tau_excess"].max(initial=-np.inf)),
-        "fixed_point_converged": float(np.mean(traj.steps["osqp_status"] != 3)) if len(traj.tau) else 1.0,
+        "fixed_point_converged": float(np.mean(traj.steps["fp_converged"])) if len(traj.tau) else 1.0,
+        **impacts(traj),
     }
 
 
 __all__ = ["joint_rates", "locomotion_power", "locomotion_work", "box_point_velocity", "contact_power_on_box",
-           "box_work", "box_distance", "efficiency_fit", "efficiency_slope", "ContactForces", "contact_forces", "summary",
+           "box_work", "box_distance", "efficiency_fit", "efficiency_slope", "impacts", "ContactForces", "contact_forces",
+           "summary",
            "ROBOT_GROUND", "ROBOT_BOX", "BOX_GROUND"]

@@ -181,13 +181,13 @@ def box_corner_plane_gaps(R_box, p_box, half, t_hint=None) -> list[Gap]:
 # --- batched forms for the simulator (tests/test_gaps.py checks them equal to the functions above)
 
 
-def contact_frames(n: np.ndarray, t_hint: np.ndarray) -> np.ndarray:
+def contact_frames(n: np.ndarray, t_hint: np.ndarray | None = None) -> np.ndarray:
     """(k, 3, 3) frames [n, t1, t2] for unit normals n (k, 3); rows of t_hint that are NaN mean none.
 
     Helper: the row-wise form of :func:`contact_frame` (same rules, same results).
     """
     a = np.where(np.abs(n[:, :1]) > 0.9, e_y, e_x)  # default tangent seed
-    hint = np.where(np.isnan(t_hint), 0.0, t_hint)
+    hint = np.zeros_like(n) if t_hint is None else np.where(np.isnan(t_hint), 0.0, t_hint)
     t_perp = hint - (hint * n).sum(axis=1)[:, None] * n
     # |t_perp| > 1e-9 |t_hint|, squared
     use_hint = (t_perp * t_perp).sum(axis=1) > 1e-18 * (hint * hint).sum(axis=1)

@@ -76,6 +76,13 @@ class Model:
     visual_cylinders: tuple[tuple[float, float, float] | None, ...] = ()
     mu: float = 1.0  # Coulomb friction of robot-ground and box-ground contacts
     mu_robot_box: float | None = None  # robot-box contacts; None = the same as mu (see mu_rb)
+    # the compliant contact law and the joint servo (cobra_ref.compliance; CobraParameters' sources)
+    contact_stiffness: float = 1e6  # k [N/m]
+    contact_damping: float = 1e3  # d [N s/m]
+    stiction_velocity: float = 1e-3  # v_s [m/s] of the smooth stick-slip friction
+    servo_kp: float = 500.0  # [N m/rad]
+    servo_kd: float = 5.0  # [N m s/rad]
+    qd_limit: tuple[float, ...] = ()  # |qd| <= qd_limit per revolute joint, reported (empty: none)
     # derived in __post_init__
     X_tree: tuple[np.ndarray, ...] = field(init=False)
     I: tuple[np.ndarray, ...] = field(init=False)
@@ -169,6 +176,10 @@ def _validate(model: Model) -> None:
         value = getattr(model, name)
         if value is not None and not (np.isfinite(value) and value >= 0):
             raise ModelError(f"{name} must be finite and >= 0, got {value}")
+    for name in ("contact_stiffness", "contact_damping", "stiction_velocity", "servo_kp", "servo_kd"):
+        value = getattr(model, name)
+        if not (np.isfinite(value) and value > 0):
+            raise ModelError(f"{name} must be finite and > 0, got {value}")
     for i in range(nb):
         who = f"body {i} ({model.body_names[i]!r})"
         if not -1 <= model.parent[i] < i:

@@ -1,21 +1,17 @@
 """Every number of the COBRA + box model, with its source.
 
-Sources are keyed as in ``../shared/notes/paper-facts.md``:
+Sources:
 
-* **paper**   -- [COBRA] arXiv 2404.08714, section "Simulation Setup" (the seed LaTeX).
-* **derived** -- computed from paper numbers; the arithmetic is in the notes, Part B.
-* **datasheet** -- ROBOTIS XH540-W270 e-manual (notes A4).
-* **assumption** -- the paper is silent; the documented choice of notes Part C (C1..C21).
+* **paper** -- [COBRA] arXiv 2404.08714, section "Simulation Setup";
+* **derived** -- computed from paper numbers (the arithmetic is in ``docs/assumptions.md``);
+* **datasheet** -- the ROBOTIS XH540-W270 e-manual;
+* **assumption** -- the paper is silent: a documented choice, with its id (A1, A2, ...) in
+  ``docs/assumptions.md``, which gives the choice, the reason and the source.
 
-The seed LaTeX has three typos that we record here instead of silently fixing them:
-
-1. head inertia printed as "I_xx - 4.4562e-4": read as "=" (notes A1);
-2. contact stiffness printed as "1e-4 N/m": physically impossible (4.9e4 m static sinkage
-   for one link); most likely the Simscape transition width 1e-4 m (notes B4). Our hard
-   contact model (issue 3) has no stiffness; the compliant reading k = 1e6 N/m is kept here
-   for the record only;
-3. "ode45 with a fixed timestep of 1e-4 s": ode45 is variable-step; read as max step 1e-4 s
-   (notes C14). Our velocity-level stepper uses dt = 1e-3 s (notes C15).
+The paper's text has three typos that are read, not silently fixed (``docs/assumptions.md``):
+the head inertia "I_xx - 4.4562e-4" is read as "=" (A23); the contact stiffness "1e-4 N/m"
+would sink one link 49 km into the ground and is read as Simscape's default 1e6 N/m (A12);
+"ode45 with a fixed timestep of 1e-4 s" is read as a maximum step (A14).
 
 Use ``dataclasses.replace(CobraParameters(), mu=0.8)`` to vary a number; ``cobra-ref info``
 prints every value next to its source.
@@ -56,20 +52,20 @@ class CobraParameters:
     # --- box --------------------------------------------------------------------------------
     box_size: float = 0.10
     box_mass: float = 0.5
+    # --- joint servo (position control) ---------------------------------------------------------
+    servo_kp: float = 500.0
+    servo_kd: float = 5.0
     # --- environment and contact --------------------------------------------------------------
     gravity: float = 9.81
     mu: float = 1.0
     mu_robot_box: float = 0.5
-    mu_static: float = 1.3
-    # --- the paper's compliant-contact settings, kept for the record (not used by the hard model)
-    paper_contact_stiffness: float = 1e-4
-    paper_contact_damping: float = 1e3
-    paper_v_crit: float = 1e-3
-    paper_dt: float = 1e-4
+    contact_stiffness: float = 1e6
+    contact_damping: float = 1e3
+    stiction_velocity: float = 1e-3
 
     @property
     def total_length(self) -> float:
-        """Head + 10 links + tail + 11 joint gaps (derived, notes B2): 1.695 m."""
+        """Head + 10 links + tail + 11 joint gaps (derived, A2): 1.695 m."""
         n = self.n_body_links
         return self.length_head + n * self.length_link + self.length_tail + (n + 1) * self.joint_gap
 
@@ -79,39 +75,39 @@ class CobraParameters:
 
     @property
     def box_inertia(self) -> float:
-        """Solid cube about any central axis: I = m a^2 / 6 (derived, notes C8)."""
+        """Solid cube about any central axis: I = m a^2 / 6 (derived, A8)."""
         return self.box_mass * self.box_size**2 / 6.0
 
 
 SOURCES: dict[str, str] = {
-    "n_body_links": "paper: 11 actuated joints; head + L1..L10 + tail = 12 bodies (notes A1, A3, B3)",
+    "n_body_links": "paper: 11 actuated joints; head + L1..L10 + tail = 12 bodies (A3)",
     "mass_head": "paper: 'Each link is modeled as a rigid body weighing 0.5 kg'",
     "mass_link": "paper: 'Each link is modeled as a rigid body weighing 0.5 kg'",
     "mass_tail": "paper: 'Each link is modeled as a rigid body weighing 0.5 kg'",
-    "inertia_head": "paper: (Ixx, Iyy, Izz) principal, x = long axis; seed typo 'Ixx -' read as '='",
+    "inertia_head": "paper: (Ixx, Iyy, Izz) principal, x = long axis; 'Ixx -' read as '=' (A23)",
     "inertia_link": "paper: (Ixx, Iyy, Izz) principal, x = long axis",
     "inertia_tail": "paper: (Ixx, Iyy, Izz) principal, x = long axis",
-    "length_head": "derived: solid cylinder from the head inertias, mean of Iyy/Izz (notes B1, C1)",
-    "radius_head": "derived: r = sqrt(2 Ixx / m) (notes B1, C1)",
-    "length_link": "derived: L = sqrt(12 Izz/m - 3 r^2) (notes B1, C1)",
-    "radius_link": "derived: r = sqrt(2 Ixx / m) (notes B1, C1)",
-    "length_tail": "derived: solid cylinder from the tail inertias (notes B1, C1)",
-    "radius_tail": "derived: r = sqrt(2 Ixx / m) (notes B1, C1)",
-    "joint_gap": "derived: (1.7 m reported length - 1.427 m of cylinders) / 11 joints (notes B2, C2)",
-    "q_max": "assumption C4: +-pi/2 rad ('range of motion mimicking the real robot', not given)",
-    "tau_max": "datasheet: XH540-W270 stall torque 9.2 N m at 11.1 V (notes A4, C5)",
-    "qd_max": "datasheet: XH540-W270 no-load 36 rpm at 11.1 V = 3.77 rad/s (notes A4, C6)",
-    "box_size": "assumption C8: 0.10 m cube (paper gives only the mass)",
+    "length_head": "derived: solid cylinder from the head inertias, mean of Iyy/Izz (A1)",
+    "radius_head": "derived: r = sqrt(2 Ixx / m) (A1)",
+    "length_link": "derived: L = sqrt(12 Izz/m - 3 r^2) (A1)",
+    "radius_link": "derived: r = sqrt(2 Ixx / m) (A1)",
+    "length_tail": "derived: solid cylinder from the tail inertias (A1)",
+    "radius_tail": "derived: r = sqrt(2 Ixx / m) (A1)",
+    "joint_gap": "derived: (1.7 m reported length - 1.427 m of cylinders) / 11 joints (A2)",
+    "q_max": "assumption A4: +-pi/2 rad ('range of motion mimicking the real robot', not given)",
+    "tau_max": "datasheet: XH540-W270 stall torque 9.2 N m at 11.1 V (A5)",
+    "qd_max": "datasheet: XH540-W270 no-load 36 rpm at 11.1 V = 3.77 rad/s (A6)",
+    "box_size": "assumption A8: 0.10 m cube (the paper gives only the mass)",
     "box_mass": "paper: 'solid box of weight 0.5 kg'",
-    "gravity": "assumption C20: 9.81 m/s^2, flat ground z = 0",
-    "mu": "paper: dynamic friction coefficient 1.0 (single mu of the hard model, notes C13)",
-    "mu_robot_box": "assumption C22: 0.5 (paper: one mu for all pairs); with mu = 1 a rolling link "
-                    "wedges the box into the ground (README 'Pushing the box')",
-    "mu_static": "paper: static friction coefficient 1.3 (compliant models only)",
-    "paper_contact_stiffness": "paper (typo): '1e-4 N/m'; compliant reading 1e6 N/m (notes B4, C12)",
-    "paper_contact_damping": "paper: 1e3 N s/m (compliant models only)",
-    "paper_v_crit": "paper: stick-slip critical velocity 1e-3 m/s (compliant models only)",
-    "paper_dt": "paper: 'ode45 with a fixed timestep of 1e-4 s' (typo: ode45 is variable-step, C14)",
+    "servo_kp": "assumption A7: static error under the stall torque tau_max / kp = 1 degree",
+    "servo_kd": "assumption A7: damps a link's swing about its joint (about 0.05 kg m^2) within a few ms",
+    "gravity": "assumption A20: 9.81 m/s^2, flat ground z = 0",
+    "mu": "paper: dynamic friction coefficient 1.0, robot-ground and box-ground (A13)",
+    "mu_robot_box": "assumption A22: 0.5 (the paper: one mu for every pair); with mu = 1 a rolling link "
+                    "wedges the box into the ground",
+    "contact_stiffness": "assumption A12: Simscape's default 1e6 N/m (the paper's '1e-4 N/m' is a typo)",
+    "contact_damping": "paper: 'damping coefficient 1e3 N s/m'",
+    "stiction_velocity": "paper: smooth stick-slip 'critical velocity 1e-3 m/s' (A13)",
 }
 
 UNITS: dict[str, str] = {
@@ -119,9 +115,9 @@ UNITS: dict[str, str] = {
     "inertia_head": "kg m^2", "inertia_link": "kg m^2", "inertia_tail": "kg m^2",
     "length_head": "m", "radius_head": "m", "length_link": "m", "radius_link": "m",
     "length_tail": "m", "radius_tail": "m", "joint_gap": "m", "q_max": "rad",
-    "tau_max": "N m", "qd_max": "rad/s", "box_size": "m", "box_mass": "kg",
-    "gravity": "m/s^2", "mu": "-", "mu_robot_box": "-", "mu_static": "-", "paper_contact_stiffness": "N/m",
-    "paper_contact_damping": "N s/m", "paper_v_crit": "m/s", "paper_dt": "s",
+    "tau_max": "N m", "qd_max": "rad/s", "box_size": "m", "box_mass": "kg", "servo_kp": "N m/rad",
+    "servo_kd": "N m s/rad", "gravity": "m/s^2", "mu": "-", "mu_robot_box": "-", "contact_stiffness": "N/m",
+    "contact_damping": "N s/m", "stiction_velocity": "m/s",
 }
 
 

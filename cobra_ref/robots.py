@@ -75,6 +75,7 @@ def cobra_model(params: CobraParameters | None = None, with_box: bool = True) ->
     nb_robot = n + 2
     q_limit = [np.inf] + [p.q_max] * (n + 1)
     tau_limit = [np.inf] + [p.tau_max] * (n + 1)
+    qd_limit = [np.inf] + [p.qd_max] * (n + 1)
     visual = [(lengths[i], radii[i], com[i][0]) for i in range(nb_robot)]
     I_com = [np.diag(I) for I in inertias]
     boxes = ()
@@ -89,6 +90,7 @@ def cobra_model(params: CobraParameters | None = None, with_box: bool = True) ->
         I_com.append(np.eye(3) * p.box_inertia)
         q_limit.append(np.inf)
         tau_limit.append(np.inf)
+        qd_limit.append(np.inf)
         visual.append(None)
         boxes = (BoxGeom(body=nb_robot, half=np.full(3, p.box_size / 2)),)
     nb = len(names)
@@ -106,6 +108,7 @@ def cobra_model(params: CobraParameters | None = None, with_box: bool = True) ->
         gravity=np.array([0.0, 0.0, -p.gravity]),
         q_limit=tuple(q_limit),
         tau_limit=tuple(tau_limit),
+        qd_limit=tuple(qd_limit),
         spheres=SphereSet(
             body=np.array([s[0] for s in sph], dtype=int),
             center=np.array([s[1] for s in sph]),
@@ -115,6 +118,11 @@ def cobra_model(params: CobraParameters | None = None, with_box: bool = True) ->
         visual_cylinders=tuple(visual),
         mu=p.mu,
         mu_robot_box=p.mu_robot_box,
+        contact_stiffness=p.contact_stiffness,
+        contact_damping=p.contact_damping,
+        stiction_velocity=p.stiction_velocity,
+        servo_kp=p.servo_kp,
+        servo_kd=p.servo_kd,
     )
 
 

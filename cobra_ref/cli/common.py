@@ -62,19 +62,19 @@ def check_writable(path: str) -> None:
 
 
 def run_and_write(model, reference, duration, settings, out, label, quiet=False, q0=None, qd0=None,
-                  meta=None, summary=None):
+                  meta=None, summary=None, stepper="fast"):
     """Simulate, write the NPZ and print the one-line JSON summary (plus ``summary(traj)``'s keys);
     a failure mid-run writes what was computed to OUT.failed.npz and exits with the error.
 
     Helper: shared by every cobra-ref subcommand.
     """
-    from ..fast.stepper import SimulationError
     from ..simulate import simulate
+    from ..step import SimulationError
 
     progress = None if quiet else progress_printer(label)
     try:
         with c_stdout_silenced():
-            traj = simulate(model, reference, duration, settings, q0, qd0, progress=progress)
+            traj = simulate(model, reference, duration, settings, q0, qd0, progress=progress, stepper=stepper)
     except SimulationError as exc:
         if exc.trajectory is None:  # bad input: nothing was computed, nothing is written
             raise SystemExit(f"error: {exc}") from None

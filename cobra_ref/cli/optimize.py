@@ -84,9 +84,12 @@ def add_parsers(sub) -> None:
     p.add_argument("--dt", type=finite_float, default=1e-3, help="time step [s] (default 1e-3)")
     p.add_argument("--ramp-time", type=finite_float, default=RAMP_TIME,
                    help=f"ramp-in of the gait's phase rate [s] (default {RAMP_TIME})")
-    p.add_argument("--servo", choices=("prescribed", "pd"), default="prescribed",
-                   help="joint servo of the rollouts: prescribed (default; the paper's motion provided, impact "
-                        "torques above tau_max penalised) or pd (torques saturated at tau_max at every step)")
+    p.add_argument("--servo", choices=("position", "prescribed"), default="position",
+                   help="joints of the rollouts: position (default, the paper's position control within tau_max) "
+                        "or prescribed (the joints follow the reference exactly, torques recovered and penalised "
+                        "above tau_max)")
+    p.add_argument("--contact", choices=("compliant", "rigid"), default="compliant",
+                   help="contact law of the rollouts (default compliant)")
     p.add_argument("--box-gap", type=finite_float, default=0.05,
                    help="gap between the box and the middle link at the start [m] (default 0.05, assumption C9)")
     p.add_argument("--maxiter", type=_count, default=None,
@@ -123,7 +126,7 @@ def cmd_optimize(args) -> int:
     with c_stdout_silenced():  # OSQP's "Polishing not needed" lines (workers: parallel.worker_init)
         try:
             problem = make_problem(args.gait, goal, duration=duration, dt=args.dt, ramp_time=args.ramp_time,
-                                   box_gap=args.box_gap, servo=args.servo,
+                                   box_gap=args.box_gap, servo=args.servo, contact=args.contact,
                                    bounds=_assignments(args.bound, 2, "--bound"),
                                    x0=_assignments(args.start, 1, "--start"))
         except ShootingError as exc:

@@ -26,14 +26,14 @@ def cmd_simulate(args) -> int:
     """
     if args.params:
         return cmd_simulate_params(args)
-    from ..fast.stepper import StepSettings
     from ..reference import ReferenceError, builtin_reference, load_reference
+    from ..step import StepSettings
 
     # check every input before the (long) run, so that bad input writes nothing
     check_writable(args.out)
     try:
         reference = load_reference(args.reference) if args.reference else builtin_reference(args.gait)
-        settings = StepSettings(dt=args.dt, servo=args.servo, osqp=args.osqp)
+        settings = StepSettings(dt=args.dt, contact=args.contact, servo=args.servo)
     except (ReferenceError, ValueError) as exc:
         raise SystemExit(f"error: {exc}") from None
     params = CobraParameters()
@@ -44,7 +44,7 @@ def cmd_simulate(args) -> int:
     except ValueError as exc:
         raise SystemExit(f"error: {exc}") from None
     run_and_write(model, reference, 10.0 if args.duration is None else args.duration, settings, args.out,
-                  f"simulate {args.reference or args.gait}", args.quiet)
+                  f"simulate {args.reference or args.gait}", args.quiet, stepper=args.stepper)
     return 0
 
 
@@ -68,13 +68,16 @@ def add_parsers(sub) -> None:
     p.add_argument("--duration", type=finite_float, default=None,
                    help="simulated time [s] (default 10; with --params the optimization's horizon)")
     p.add_argument("--dt", type=finite_float, default=1e-3, help="time step [s] (default 1e-3)")
-    p.add_argument("--servo", choices=("prescribed", "pd"), default="prescribed",
-                   help="joint servo (default prescribed: the joints follow the reference exactly)")
-    p.add_argument("--osqp", choices=("every-step", "fallback"), default="every-step",
-                   help="OSQP solves every step's contact problem (default), or only those the certified "
-                        "active-set path cannot (faster, same answers to OSQP's tolerance)")
+    p.add_argument("--contact", choices=("compliant", "rigid"), default="compliant",
+                   help="contact law: compliant (default, the paper's spring-damper contact) or rigid "
+                        "(eq. (2)-(6) as written)")
+    p.add_argument("--servo", choices=("position", "prescribed"), default="position",
+                   help="joints: position (default, the paper's position control within tau_max) or prescribed "
+                        "(the joints follow the reference exactly, torques recovered)")
+    p.add_argument("--stepper", choices=("fast", "reference"), default="fast",
+                   help="fast (default) or reference (the readable step, slow; the same physics)")
     p.add_argument("--mu-robot-box", type=finite_float, default=None,
-                   help="friction coefficient of robot-box contacts (default 0.5, assumption C22)")
+                   help="friction coefficient of robot-box contacts (default 0.5, assumption A22)")
     p.add_argument("--out", default="run.npz", help="output NPZ (default run.npz)")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=cmd_simulate)
@@ -95,7 +98,7 @@ def cmd_simulate_params(args) -> int:
         raise SystemExit(f"error: {exc}") from None
     meta = {"gait": run.gait, "gait_params": gait_params(run.reference), "params_file": args.params}
     run_and_write(run.model, run.reference, run.duration, run.settings, args.out, f"simulate {args.params}",
-                  args.quiet, run.q0, run.qd0, meta, lambda traj: params_summary(run, traj))
+                  args.quiet, run.q0, run.qd0, meta, lambda traj: params_summary(run, traj), stepper=args.stepper)
     return 0
 
 

@@ -1,131 +1,58 @@
-"""Certified active-set solves of the contact QP: a guess of the active set, and a KKT proof.
+"""Certified solves of a box-constrained QP: a guess of the active set, and a KKT proof.
 
-Helper (performance) for the friction fixed point of [COBRA] eq. (6) in
-:mod:`cobra_ref.contact_qp`: its iterates are one QP whose friction bounds move a little from
-one iterate to the next, and whose active set (the contacts that are released, the ones that
-slide) seldom changes from one iterate, or one step, to the next. The QP, in OSQP's form::
+Helper (performance) for the least-action iterates of [COBRA] eq. (6)
+(:func:`cobra_ref.least_action.solve_least_action`): each is a box QP, one iterate differs little
+from the last, and its active set (the contacts released, the friction at its bound, the servo
+rows that saturate) seldom changes from one iterate, or one step, to the next::
 
-    min_x 1/2 x^T P x + q^T x    s.t.  l <= A x <= u          (P positive definite)
+    min_x 1/2 x^T P x + q^T x    s.t.  lo <= x <= hi          (P positive definite)
 
-With W the rows guessed to sit at a bound, v_W that bound (l or u), the equality-constrained
-problem is one linear (KKT) system::
+With the variables W held at a bound, the others solve P_FF x_F = -(q_F + P_FW x_W) (one
+Cholesky solve), and since P > 0 the minimiser is unique: the answer is *certified* only if
 
-    [ P    A_W^T ] [ x   ]   [ -q  ]
-    [ A_W  0     ] [ y_W ] = [ v_W ],      y = 0 on the rows not in W
+    lo_i - tol <= x_i <= hi_i + tol        on every free variable          (primal feasible)
+    g_i >= -tol where held at lo,  g_i <= tol where held at hi              (dual feasible)
+    |g_i| <= eps_abs + eps_rel * scale     on every free variable          (stationarity)
 
-and OSQP's optimality conditions P x + q + A^T y = 0, y_i > 0 only at u_i, y_i < 0 only at
-l_i, l <= A x <= u, are then sufficient for the minimiser (P > 0: the QP is strictly convex,
-its minimiser unique). So the answer is *certified*: it is returned only if
+with g = P x + q and tol = eps_abs + eps_rel * scale, OSQP's own termination test, so an
+accepted answer is as accurate as OSQP's (``box_certificate``). Otherwise OSQP solves it.
+Variables with lo_i = hi_i (a contact whose friction bound is zero) are always held, their
+multiplier may take either sign.
 
-    l_i - tol <= (A x)_i <= u_i + tol      on every row not in W        (primal feasible)
-    y_i >= -tol at an upper bound,  y_i <= tol at a lower bound          (dual feasible)
-    |P x + q + A^T y| <= eps_abs + eps_rel * max(|P x|, |A^T y|, |q|)   (stationarity)
-
-with tol = eps_abs + eps_rel * scale, OSQP's own termination test, so an accepted answer is as
-accurate as OSQP's. Otherwise the caller asks OSQP. Rows with l_i = u_i (a contact whose
-friction bound is zero) are always in W and their y may take either sign.
-
-With K = 4 facets every row of A bounds one impulse component (A is a permutation), so
-the QP is box-constrained, lo <= x <= hi, and the guess is improved by the primal-dual
-active-set iteration of Hintermueller, Ito & Kunisch (SIAM J. Optim. 13, 2002), with
-g = P x + q and d = diag(P)::
+The guess is improved by the primal-dual active-set iteration of Hintermueller, Ito & Kunisch
+(SIAM J. Optim. 13, 2002), with d = diag(P)::
 
     held at lo:  x_i - g_i / d_i <= lo_i,     held at hi:  x_i - g_i / d_i >= hi_i
-    x_W = bound,  P_FF x_F = -(q_F + P_FW x_W)           (Cholesky on the free variables)
 
 repeated until the held set stops changing (at most ``ROUNDS`` times), then certified. Full
 rounds can cycle (P is not an M-matrix); then up to ``SINGLE_FLIPS`` more rounds change only
-the worst violation beyond its certificate tolerance (measured on the box-pushing steps whose
-friction fixed point had not converged: OSQP solves per step 8.6 -> 1.5, converged 9 -> 28 of
-60). For other A (K = 8) the one guess from the starting iterate is solved and certified.
+the worst violation beyond its certificate tolerance.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
 from scipy import linalg
 
-
-class WorkingSet(NamedTuple):
-    """Which rows are held at a bound: at_lower (l_i) or at_upper (u_i), as boolean masks."""
-
-    at_lower: np.ndarray
-    at_upper: np.ndarray
-
-
-def working_set(Ax: np.ndarray, y: np.ndarray, l: np.ndarray, u: np.ndarray) -> WorkingSet:
-    """The rows an iterate (A x, y) points at, by OSQP's polishing rule; rows with l = u included.
-
-    Helper: row i is held at l_i if (A x)_i - l_i < -y_i and at u_i if u_i - (A x)_i < y_i
-    (closer to the bound than its multiplier is large; a violated row counts as held).
-    """
-    fixed = l == u
-    at_upper = u - Ax < y
-    return WorkingSet((Ax - l < -y) & ~at_upper | (fixed & ~at_upper), at_upper)
-
-
-ROUNDS = 8  # primal-dual active-set rounds before giving up (and asking OSQP); 3 or 5 left more to OSQP
-SINGLE_FLIPS = 16  # then rounds that change only the worst violation (rounds cycle where P is not an M-matrix)
+ROUNDS = 8  # primal-dual active-set rounds before giving up (and asking OSQP)
+SINGLE_FLIPS = 16  # then rounds that change only the worst violation (full rounds can cycle)
 _posv = linalg.get_lapack_funcs("posv", (np.zeros(1),))
 
 
-class BoxForm(NamedTuple):
-    """A constraint matrix that is a permutation: row r is the unit row of variable col[r]."""
+def held_at_bounds(x, lo, hi, y=None):
+    """(at_lo, at_hi): the variables an iterate x holds at their bounds.
 
-    col: np.ndarray
-
-
-def box_form(A: np.ndarray) -> BoxForm | None:
-    """The BoxForm of A, or None if some row of A is not one entry 1 on a column of its own.
-
-    Helper: recognizes the K = 4 friction pyramid's constraint matrix (rows p_N, t1 . p_T,
-    t2 . p_T) as bounds on the variables.
+    Helper: the first guess of ``solve_box``: a variable within 1e-12 (relative) of a bound, or,
+    with OSQP's duals y, one whose multiplier points at the bound.
     """
-    nonzero = A != 0
-    if A.shape[0] != A.shape[1] or not np.all(nonzero.sum(axis=1) == 1):
-        return None
-    col = np.argmax(nonzero, axis=1)
-    if len(np.unique(col)) != len(col) or not np.all(A[np.arange(len(col)), col] == 1.0):
-        return None
-    return BoxForm(col)
-
-
-def certified_solve(P, q, A, l, u, x0, y0, eps_abs: float, eps_rel: float, box: BoxForm | None = None):
-    """(x, y, at_lo, at_hi) of the QP, certified (module docstring), from the iterate (x0, y0); or None.
-
-    Helper: the certified solve of the friction fixed point's QPs ([COBRA] eq. (6)).
-
-    The first guess of the active set is the one (x0, y0) points at (``working_set``).
-    ``box``: ``box_form(A)`` if A is a permutation; then the active-set rounds run, and
-    at_lo/at_hi are the (n,) masks of the variables held at their lower/upper bound. For other
-    A the first guess is the only one, and at_lo/at_hi are None.
-    """
-    if box is None:
-        solved = solve_on_working_set(P, q, A, l, u, working_set(A @ x0, y0, l, u), eps_abs, eps_rel)
-        return None if solved is None else (*solved, None, None)
-    # the bounds per variable: l_r <= x_c <= u_r
-    lo, hi = np.empty(len(q)), np.empty(len(q))
-    lo[box.col], hi[box.col] = l, u
-    solved = solve_box(P, q, lo, hi, x0, eps_abs, eps_rel, guess=held_variables(box, x0, y0, l, u))
-    if solved is None:
-        return None
-    x, at_lo, at_hi, g = solved
-    # OSQP's duals: g_c + y_r = 0 on held rows, 0 on free ones
-    y = np.where((at_lo | at_hi)[box.col], -g[box.col], 0.0)
-    return x, y, at_lo, at_hi
-
-
-def held_variables(box: BoxForm, x, y, l, u):
-    """(at_lo, at_hi): the variables that the iterate (x, y) holds at their lower/upper bound.
-
-    Helper: ``working_set`` on the rows, mapped to the variables they bound.
-    """
-    ws = working_set(x[box.col], y, l, u)
-    at_lo, at_hi = np.empty(len(x), dtype=bool), np.empty(len(x), dtype=bool)
-    at_lo[box.col], at_hi[box.col] = ws.at_lower, ws.at_upper
-    return at_lo, at_hi
+    tol = 1e-12 * max(float(np.abs(x).max(initial=0.0)), 1e-300)
+    at_hi = x >= hi - tol
+    at_lo = (x <= lo + tol) & ~at_hi
+    if y is not None:
+        at_hi |= y > 0
+        at_lo = (at_lo | (y < 0)) & ~at_hi
+    # only finite bounds can hold a variable
+    return at_lo & np.isfinite(lo), at_hi & np.isfinite(hi)
 
 
 def solve_box(P, q, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = ROUNDS, guess=None):
@@ -209,45 +136,3 @@ def _box_tolerances(x, g, free, eps_abs: float, eps_rel: float) -> tuple[float, 
     """OSQP's tolerances eps_abs + eps_rel * scale for the bounds (scale max |x|) and for the
     multipliers (scale max |g| over the held variables)."""
     return (eps_abs + eps_rel * float(np.abs(x).max()), eps_abs + eps_rel * float(np.abs(g * ~free).max()))
-
-
-def solve_on_working_set(P: np.ndarray, q: np.ndarray, A: np.ndarray, l: np.ndarray, u: np.ndarray,
-                         ws: WorkingSet, eps_abs: float, eps_rel: float):
-    """(x, y) of the QP if the working set ``ws`` is its active set (certified), else None.
-
-    Helper: the KKT solve (LU, one step of iterative refinement: the system is ill-conditioned
-    when contacts are redundant) and the checks of the module docstring.
-    """
-    W = ws.at_lower | ws.at_upper
-    n, rows = len(q), np.flatnonzero(W)
-    A_W = A[rows]
-    K = np.zeros((n + len(rows), n + len(rows)))
-    K[:n, :n] = P
-    K[:n, n:] = A_W.T
-    K[n:, :n] = A_W
-    rhs = np.concatenate([-q, np.where(ws.at_upper, u, l)[rows]])
-    try:
-        lu = linalg.lu_factor(K, check_finite=False)
-        sol = linalg.lu_solve(lu, rhs, check_finite=False)
-        sol += linalg.lu_solve(lu, rhs - K @ sol, check_finite=False)
-    except (np.linalg.LinAlgError, ValueError):
-        return None
-    x = sol[:n]
-    y = np.zeros(len(l))
-    y[rows] = sol[n:]
-    Ax = A @ x
-    finite = np.isfinite(u)
-    tol_primal = eps_abs + eps_rel * float(np.max(np.abs(Ax), initial=0.0))
-    tol_dual = eps_abs + eps_rel * float(np.max(np.abs(y), initial=0.0))
-    free = ~W
-    if np.any(Ax[free] < l[free] - tol_primal) or np.any((Ax > u + tol_primal)[free & finite]):
-        return None
-    fixed = l == u
-    if np.any(y[ws.at_upper & ~fixed] < -tol_dual) or np.any(y[ws.at_lower & ~fixed] > tol_dual):
-        return None
-    # stationarity, measured, not assumed from the linear solve
-    Px, ATy = P @ x, A.T @ y
-    scale = max(float(np.max(np.abs(Px))), float(np.max(np.abs(ATy))), float(np.max(np.abs(q))))
-    if not (np.all(np.isfinite(x)) and np.max(np.abs(Px + q + ATy)) <= eps_abs + eps_rel * scale):
-        return None
-    return x, y

@@ -1,64 +1,26 @@
-"""Contact candidates of the COBRA + box scene and their stacked Jacobian J_c.
+"""The contacts of the scene and their Jacobian J_c, in batches: the fast wing's contact search.
 
-Implements: [COBRA] eq. (3)-(4): for each contact i between body A and body B (the ground or
-the box), the gap g_i(q) of :mod:`cobra_ref.gaps` and its rate
-
-    g'_i = n_i . (v_A(point_A) - v_B(point_B)) = W_i^T u,    W_i^T = n_i^T (J_A - J_B)
-
-which is *relative*: when B is the moving box, dg/dt depends on the box's motion too
-(the paper's dg/dt != 0 for a moving object). Stacking [n, t1, t2]^T (J_A - J_B) for every
-contact gives J_c with g' = J_c u (eq. (4)); rows are ordered contact by contact.
-
-Contact kinds (``KINDS``): robot sphere on the ground, robot sphere on the box, box corner on
-the ground. Body A is the robot link (or the box, for box-ground); the normal points from B to
-A, so a positive normal impulse pushes A away from B. A candidate enters the contact problem
-when its gap is below ``margin`` (speculative contacts: the QP then forbids closing more than
-the gap within one step, so fast approach cannot tunnel).
+Helper (performance): the same contacts, in the same order and with the same frames, as
+:func:`cobra_ref.contact.find_contacts` and :func:`cobra_ref.contact.contact_jacobian` (tested
+equal), computed with batched NumPy from the world-frame chain terms of
+:class:`cobra_ref.fast.chain.ChainModel` instead of one gap function call per pair.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
 
 from .. import gaps as gapfn
-from .chain import ChainModel, ChainTerms
+from ..contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND, Contacts
 from ..spatial import skew_rows
-
-KINDS = ("robot-ground", "robot-box", "box-ground")
-ROBOT_GROUND, ROBOT_BOX, BOX_GROUND = 0, 1, 2
+from .chain import ChainModel, ChainTerms
 
 
-class Contacts(NamedTuple):
-    """Candidate contacts (struct of arrays, m entries)."""
+def find_contacts(model, terms: ChainTerms, margin: float) -> Contacts:
+    """Every candidate contact with gap g < margin, in the order of :func:`cobra_ref.contact.find_contacts`.
 
-    kind: np.ndarray  # (m,) index into KINDS
-    body_A: np.ndarray  # (m,) body of point_A
-    body_B: np.ndarray  # (m,) body of point_B, -1 for the ground
-    feature: np.ndarray  # (m,) sphere index (robot contacts) or box corner index (box-ground)
-    g: np.ndarray  # (m,) signed gaps [m]
-    frame: np.ndarray  # (m, 3, 3) columns [n, t1, t2], world
-    point_A: np.ndarray  # (m, 3) witness point on A, world
-    point_B: np.ndarray  # (m, 3) witness point on B, world
-
-    @property
-    def m(self) -> int:
-        return len(self.g)
-
-    def keys(self) -> list[tuple[int, int, int]]:
-        """Identity of each contact across steps (for warm starts and logs)."""
-        return list(zip(self.kind.tolist(), self.body_A.tolist(), self.feature.tolist()))
-
-
-def find_contacts(model, terms: ChainTerms, margin: float, t_hint: dict | None = None) -> Contacts:
-    """All candidate contacts with gap < margin, in a fixed order (ground, box, box corners).
-
-    Implements: the active set of [COBRA] eq. (2): contacts whose gap g_i is (nearly) closed,
-    with the gap functions of :mod:`cobra_ref.gaps` in their batched forms.
-
-    ``t_hint`` maps a contact key to a tangent direction (the previous sliding direction), so
-    that t1 follows the slip and the friction pyramid is exact along it.
+    Helper: the batched form of the reference contact search (the gap functions of
+    :mod:`cobra_ref.gaps` row by row).
     """
     sph = model.spheres
     centers = terms.p[sph.body] + np.einsum("sij,sj->si", terms.R[sph.body], sph.center)
@@ -96,13 +58,8 @@ def find_contacts(model, terms: ChainTerms, margin: float, t_hint: dict | None =
     body_B = np.repeat([-1] + [b for body in box_bodies for b in (body, -1)], counts)
     body_A, feature = np.concatenate(body_A).astype(int), np.concatenate(feature).astype(int)
     g, n, point_A, point_B = (np.concatenate(x) for x in (g, n, point_A, point_B))
-    hints = np.full((len(g), 3), np.nan)
-    if t_hint:
-        for i, key in enumerate(zip(kind.tolist(), body_A.tolist(), feature.tolist())):
-            if key in t_hint:
-                hints[i] = t_hint[key]
-    return Contacts(kind, body_A, body_B, feature, g.astype(float), gapfn.contact_frames(n, hints),
-                    point_A, point_B)
+    frames = gapfn.contact_frames(n)
+    return Contacts(kind, body_A, body_B, feature, g.astype(float), frames, point_A, point_B)
 
 
 _E_Z_ROWS = np.tile(gapfn.e_z, (64, 1))
@@ -114,13 +71,11 @@ def _e_z_rows(k: int) -> np.ndarray:
 
 
 def contact_jacobian(chain: ChainModel, terms: ChainTerms, contacts: Contacts) -> np.ndarray:
-    """Stacked relative contact Jacobian J_c (3m, nv): rows [n, t1, t2]^T (J_A - J_B) per contact.
+    """Stacked relative contact Jacobian J_c (3m, nv), rows [n, t1, t2]^T (J_A - J_B) per contact.
 
-    Implements: [COBRA] eq. (3)-(4), g' = J_c u, with W_i^T = n_i^T (J_A - J_B) the gap's
-    gradient (checked against finite differences of the gap functions in the tests).
-
-    Every body point's Jacobian is J(x) = S_lin - x × S_ang over the dofs that move the body
-    (``ChainModel.point_jacobian``); here all contacts at once.
+    Helper: the batched form of :func:`cobra_ref.contact.contact_jacobian`: every body point's
+    Jacobian is J(x) = S_lin - x × S_ang over the dofs that move the body
+    (``ChainModel.point_jacobian``), here for all contacts at once.
     """
     J_rel = _point_jacobians(chain, terms, contacts.body_A, contacts.point_A)
     on_body = contacts.body_B >= 0

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..simulate import Trajectory
-from ..fast.stepper import SimulationError
+from ..step import SimulationError
+from ..trajectory import Trajectory
 from .problem import FAILED_COST, ShootingProblem, rollout
 
 def shooting_cost(problem: ShootingProblem, traj: Trajectory) -> dict:
@@ -36,17 +36,20 @@ def shooting_cost(problem: ShootingProblem, traj: Trajectory) -> dict:
 def contact_report(traj: Trajectory, tau_max: float) -> dict:
     """How well every step's contact impulses met the QP's conditions, and the limits' record.
 
-    Implements: the paper's "f_ext orthogonal to the gap functions and their derivative": the
-    KKT conditions of eq. (6) per step (``contact_qp.kkt_residuals``): complementarity
-    max_i |p_N,i w_N,i| [N s m/s] and the relative friction-cone violation, maxima over the
-    rollout; plus the torque and joint-limit excess (``tau_excess``, ``q_excess``).
+    Implements: the KKT conditions of eq. (6) per step (``least_action.kkt_residuals``):
+    complementarity max_i |p_N,i g_N,i| [N s m/s], the friction outside Coulomb's circle and
+    the steps whose friction fixed point did not converge, maxima over the rollout; the impacts
+    (approach speed at contact onset, the paper's non-impulsive condition); and the torque and
+    joint-limit excess (``tau_excess``, ``q_excess``).
     """
     s = traj.steps
     n = max(len(traj.tau), 1)
     return {"max_complementarity": float(np.max(s["complementarity"], initial=0.0)),
             "max_cone_residual": float(np.max(s["cone_residual"], initial=0.0)),
             "max_penetration": float(np.max(s["max_penetration"], initial=0.0)),
-            "steps_not_solved": int(np.sum(s["osqp_status"] != 1)),
+            "steps_not_converged": int(np.sum(s["fp_converged"] == 0)),
+            "impact_impulse": float(np.sum(s["impact_impulse"])),
+            "impacts": int(np.sum(s["impact_count"])),
             "max_tau_excess": float(np.max(s["tau_excess"], initial=-np.inf)),
             "steps_over_tau_max": int(np.sum(s["tau_excess"] > 0)),
             "fraction_over_tau_max": float(np.sum(s["tau_excess"] > 0)) / n,

@@ -68,8 +68,10 @@ from ..kinematics import forward_kinematics
 from ..params import CobraParameters
 from ..quaternion import quat_mul
 from ..robots import cobra_model
-from ..simulate import Trajectory, initial_state, simulate
-from ..fast.stepper import SimulationError, StepSettings
+from ..simulate import simulate
+from ..start import initial_state
+from ..step import SimulationError, StepSettings
+from ..trajectory import Trajectory
 
 ROLLING_DECISION = (("amplitude", 0.25, 0.75), ("frequency", 0.25, 1.0))
 DECISION = {  # gait -> ((parameter, lower, upper), ...)  (module docstring)
@@ -136,7 +138,8 @@ class ShootingProblem:
     middle_pose0: tuple  # (x, y, heading) of the robot's middle at t = 0
     box_direction: tuple | None  # sidewinding: the direction the box was placed in
     cobra: tuple = field(default=())  # ((name, value), ...) of CobraParameters
-    servo: str = "prescribed"  # the joint servo of every rollout (StepSettings.servo)
+    servo: str = "position"  # the joint servo of every rollout (StepSettings.servo)
+    contact: str = "compliant"  # the contact law of every rollout (StepSettings.contact)
 
     @property
     def goal_world(self) -> np.ndarray:
@@ -150,7 +153,7 @@ class ShootingProblem:
         return gait(self.gait, **self.params(x))
 
     def settings(self) -> StepSettings:
-        return StepSettings(dt=self.dt, servo=self.servo)
+        return StepSettings(dt=self.dt, contact=self.contact, servo=self.servo)
 
     def cobra_parameters(self) -> CobraParameters:
         return CobraParameters(**{k: tuple(v) if isinstance(v, list) else v for k, v in self.cobra})
@@ -159,7 +162,7 @@ class ShootingProblem:
 def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, dt: float = 1e-3, bounds=None,
                  x0=None, decision=None, ramp_time: float = RAMP_TIME, weights: Weights = Weights(),
                  cobra: CobraParameters | None = None, box_gap: float = 0.05,
-                 servo: str = "prescribed") -> ShootingProblem:
+                 servo: str = "position", contact: str = "compliant") -> ShootingProblem:
     """Check the input and build the problem: bounds, initial guess, the common box placement.
 
     Helper: the input side of the shooting method (module docstring). ``bounds`` = {name: (lo, hi)}
@@ -177,8 +180,10 @@ def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, dt: f
     """
     if gait_name not in DECISION:
         raise ShootingError(f"unknown gait {gait_name!r}; gaits: {', '.join(DECISION)}")
-    if servo not in ("prescribed", "pd"):
-        raise ShootingError(f"servo must be 'prescribed' or 'pd', got {servo!r}")
+    try:
+        StepSettings(dt=dt if np.isfinite(dt) and dt > 0 else 1e-3, servo=servo, contact=contact)
+    except ValueError as exc:
+        raise ShootingError(str(exc)) from None
     if not (np.isfinite(duration) and duration > 0):
         raise ShootingError(f"duration must be positive and finite, got {duration}")
     if not (np.isfinite(dt) and 0 < dt <= duration):
@@ -191,10 +196,10 @@ def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, dt: f
     ref = gait(gait_name, **guess, **dict(zip(names, x_guess)))
     if not (np.isfinite(box_gap) and box_gap >= 0):
         raise ShootingError(f"box_gap must be finite and >= 0, got {box_gap}")
-    box_pose0, middle0, direction = _box_placement(gait_name, ref, duration, dt, cobra, box_gap)
+    box_pose0, middle0, direction = _box_placement(gait_name, ref, duration, dt, cobra, box_gap, servo, contact)
     return ShootingProblem(gait_name, goal, float(duration), float(dt), names, lower, upper, x_guess,
                            tuple(sorted(guess.items())), weights, box_pose0, middle0, direction,
-                           tuple(asdict(cobra).items()), servo)
+                           tuple(asdict(cobra).items()), servo, contact)
 
 
 def check_goal(goal, duration: float) -> tuple:
@@ -261,11 +266,11 @@ def _initial_guess(gait_name, names, lower, upper, x0, ramp_time) -> dict:
     return {k: float(v) for k, v in guess.items()}
 
 
-def _box_placement(gait_name, ref, duration, dt, cobra, box_gap):
+def _box_placement(gait_name, ref, duration, dt, cobra, box_gap, servo, contact):
     """The common box pose, the initial guess's middle pose and (sidewinding) the box direction."""
     direction = None
     if gait_name == "sidewinding":
-        from ..reproduce.runs.runs import RunSpec, travel_direction
+        from ..reproduce.runs import RunSpec, travel_direction
 
         spec = RunSpec(gait_name, duration=max(duration, 2.0 / ref.frequency), dt=dt, params=gait_params(ref))
         try:
@@ -273,7 +278,8 @@ def _box_placement(gait_name, ref, duration, dt, cobra, box_gap):
         except SimulationError as exc:
             raise ShootingError(f"cannot place the box for the initial guess: {exc}") from None
     model = cobra_model(cobra)
-    q0, _ = initial_state(model, ref, box_gap=box_gap, box_direction=direction)
+    q0, _ = initial_state(model, ref, StepSettings(dt=dt, servo=servo, contact=contact), box_gap=box_gap,
+                          box_direction=direction)
     box = model.q_idx[model.boxes[0].body]
     return tuple(float(v) for v in q0[box]), tuple(float(v) for v in middle_pose(model, q0)), direction
 
@@ -299,7 +305,7 @@ def start_state(problem: ShootingProblem, x, model=None):
     Helper: the common initial state (module docstring).
     """
     model = model or cobra_model(problem.cobra_parameters())
-    q0, qd0 = initial_state(model, problem.reference(x), box_direction=problem.box_direction)
+    q0, qd0 = initial_state(model, problem.reference(x), problem.settings(), box_direction=problem.box_direction)
     now, goal = middle_pose(model, q0), np.asarray(problem.middle_pose0)
     # planar rigid motion of the robot: p -> Rz(dpsi) (p - m_now) + m_goal, quat -> q_z(dpsi) * quat
     dpsi = goal[2] - now[2]
@@ -309,6 +315,9 @@ def start_state(problem: ShootingProblem, x, model=None):
     q0[base:base + 2] = goal[:2] + np.array([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]])
     q0[base + 3:base + 7] = quat_mul(np.array([np.cos(dpsi / 2), 0.0, 0.0, np.sin(dpsi / 2)]),
                                      q0[base + 3:base + 7])
+    # the base's world linear velocity (what is left of the settling) turns with it
+    v = model.v_idx[0].start
+    qd0[v:v + 2] = [c * qd0[v] - s * qd0[v + 1], s * qd0[v] + c * qd0[v + 1]]
     box = model.q_idx[model.boxes[0].body]
     q0[box] = problem.box_pose0
     return q0, qd0

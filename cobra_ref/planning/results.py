@@ -16,7 +16,7 @@ import numpy as np
 from ..output import atomic_write
 from ..gaits import gait
 from ..robots import cobra_model
-from ..simulate import Trajectory
+from ..trajectory import Trajectory
 from .cost import shooting_cost
 from .problem import DECISION, FORMAT, ShootingError, ShootingProblem, Weights, rollout, start_state
 
@@ -33,7 +33,7 @@ def problem_to_dict(problem: ShootingProblem) -> dict:
             "box_pose0": list(problem.box_pose0), "middle_pose0": list(problem.middle_pose0),
             "box_direction": None if problem.box_direction is None else list(problem.box_direction),
             "cobra_parameters": {k: list(v) if isinstance(v, tuple) else v for k, v in problem.cobra},
-            "servo": problem.servo}
+            "servo": problem.servo, "contact": problem.contact}
 
 
 def problem_from_dict(d: dict) -> ShootingProblem:
@@ -50,7 +50,7 @@ def problem_from_dict(d: dict) -> ShootingProblem:
             _floats(d["box_pose0"], 7), _floats(d["middle_pose0"], 3),
             None if d["box_direction"] is None else _floats(d["box_direction"], 2),
             tuple((str(k), tuple(v) if isinstance(v, list) else v) for k, v in d["cobra_parameters"].items()),
-            str(d.get("servo", "prescribed")))
+            str(d.get("servo", "position")), str(d.get("contact", "compliant")))
         problem.reference(problem.x0)
         problem.settings()
         problem.cobra_parameters()
@@ -175,8 +175,8 @@ def summary_lines(result: ShootingResult) -> list[str]:
                      f"with the initial guess, {b['box_distance_to_goal']:.4f} m at the optimum")
     if c:
         lines.append(f"contact conditions over the rollout: max complementarity {c['max_complementarity']:.2e} "
-                     f"N s m/s, max cone residual {c['max_cone_residual']:.2e}, {c['steps_not_solved']} steps "
-                     f"not 'solved'; torque over tau_max in {c['steps_over_tau_max']} steps "
+                     f"N s m/s, max cone residual {c['max_cone_residual']:.2e}, {c['steps_not_converged']} steps "
+                     f"with the friction fixed point not converged; torque over tau_max in {c['steps_over_tau_max']} steps "
                      f"(max excess {c['max_tau_excess']:.2f} N m), max |q| - q_max {c['max_q_excess']:.3f} rad")
     return lines
 

@@ -300,7 +300,7 @@ def cross_check(gait_names, duration: float, dt: float = 1e-3, ours: dict | None
     """
     from ..gaits import gait
     from ..robots import cobra_model
-    from ..simulate import initial_state
+    from ..start import initial_state
 
     _import_mujoco()
     model = cobra_model() if model is None else model

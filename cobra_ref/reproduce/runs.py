@@ -39,8 +39,10 @@ from ..executors import worker_init
 from ..params import CobraParameters
 from ..progress import progress_printer
 from ..robots import cobra_model
-from ..simulate import Trajectory, initial_state, simulate
-from ..fast.stepper import SimulationError, StepSettings
+from ..simulate import simulate
+from ..start import initial_state
+from ..step import SimulationError, StepSettings
+from ..trajectory import Trajectory
 
 PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
 

@@ -1,0 +1,105 @@
+"""How much each row of the least-action problem gives way: the contact law and the joint servo.
+
+Implements: the laws of the paper's "high-fidelity" model ([COBRA] sec. "Simulation Setup"):
+spring-damper normal contact, smooth stick-slip friction and position-controlled joints whose
+torque is bounded by tau_max, each written implicitly over one step as a *compliance* R >= 0
+and an *offset* b of one row of the least-action problem of eq. (6)::
+
+    min_x 1/2 x^T (G + R) x + x^T (J u_free + b)        (x: impulses of the rows)
+
+Its optimality condition on an unconstrained row is w + R x + b = 0, with w = J u+ the row's
+velocity after the step. That is the implicit law of a spring-damper acting on the row's
+coordinate e (the gap, or a joint's error from its reference) with a target rate v_ref::
+
+    f = -k e(t+dt) - d (w - v_ref),    e(t+dt) = e + dt w,    x = f dt
+    =>  w + R x + b = 0,   R = 1 / (dt (k dt + d)),   b = (k e - d v_ref) / (k dt + d)
+
+(``spring_damper``). Stiff limits: k, d -> infinity with d / k -> 0 gives R -> 0 and
+b -> e / dt: the row is then rigid, its coordinate reaches e = 0 in one step.
+
+The rows (assumption ids refer to ``docs/assumptions.md``):
+
+* contact normal, ``law="compliant"`` (A12): k = ``model.contact_stiffness``, d =
+  ``model.contact_damping`` on the gap e = g; a unilateral row (x >= 0), so the force is
+  max(0, -k g - d g') as in Simscape's spring-damper contact. ``law="rigid"``: eq. (2)-(6) as
+  written, the gap closes in one step (b = g / dt; a penetration is removed at the rate
+  beta g / dt, ``BAUMGARTE``), with the small compliance R = ``RIGID_COMPLIANCE`` G_ii of
+  MuJoCo's impedance (A15), so that redundant contacts get one force split;
+* friction, compliant (A13): the smooth stick-slip law |f_T| = mu f_N min(1, |v_T| / v_s),
+  whose sticking branch f_T = -(mu f_N / v_s) v_T is the row compliance R = v_s / (mu pbar_N)
+  (pbar_N: the normal impulse of the friction fixed point, :mod:`cobra_ref.least_action`);
+  rigid: R = ``RIGID_COMPLIANCE`` G_ii;
+* joint servo (A7): tau = kp (q_ref - q) + kd (qd_ref - qd) at the end of the step, on the
+  joint's error e = q - q_ref with v_ref = qd_ref, its impulse bounded by tau_max dt.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+LAWS = ("compliant", "rigid")
+RIGID_COMPLIANCE = 1e-2  # R = RIGID_COMPLIANCE * G_ii for rigid rows (MuJoCo's impedance d = 1 / (1 + 1e-2))
+BAUMGARTE = 0.2  # rigid contact: fraction of a penetration removed per step
+
+
+def spring_damper(k, d, dt: float, e, v_ref=0.0):
+    """(R, b) of a row whose law is f = -k e(t+dt) - d (w - v_ref), implicit over the step.
+
+    Implements: the module docstring's row law, R = 1 / (dt (k dt + d)),
+    b = (k e - d v_ref) / (k dt + d), for arrays of rows (k, d, e, v_ref broadcast).
+    """
+    k, d = np.asarray(k, dtype=float), np.asarray(d, dtype=float)
+    kdt_d = k * dt + d
+    return 1.0 / (dt * kdt_d), (k * np.asarray(e, dtype=float) - d * np.asarray(v_ref, dtype=float)) / kdt_d
+
+
+def normal_rows(model, g: np.ndarray, G_NN: np.ndarray, dt: float, law: str):
+    """(R_N, b_N): compliance and offset of the contacts' normal rows, (m,) each.
+
+    Implements: the normal contact law of the module docstring: compliant (spring-damper on the
+    gap, assumption A12) or rigid (Signorini at the velocity level with Baumgarte stabilization
+    of a penetration and MuJoCo's small compliance, A15).
+    """
+    if law == "compliant":
+        return spring_damper(model.contact_stiffness, model.contact_damping, dt, g)
+    # rigid: a gap closes at most within the step (g / dt); a penetration is removed gradually
+    b = np.where(g >= 0.0, g, BAUMGARTE * g) / dt
+    return RIGID_COMPLIANCE * G_NN, b
+
+
+def tangential_compliance(G_TT: np.ndarray, law: str) -> np.ndarray:
+    """The part of the friction rows' compliance that does not depend on the normal impulse.
+
+    Implements: the rigid law's small compliance RIGID_COMPLIANCE G_TT (assumption A15); the
+    compliant law's friction compliance depends on the normal impulse (``stick_slip_compliance``),
+    so its constant part is 0.
+    """
+    return RIGID_COMPLIANCE * G_TT if law == "rigid" else np.zeros_like(G_TT)
+
+
+STICK_SLIP_MAX = 1e3  # a stick-slip compliance is capped at STICK_SLIP_MAX G_TT (a nearly unloaded contact)
+
+
+def stick_slip_compliance(v_s: float, bound: np.ndarray, G_TT: np.ndarray) -> np.ndarray:
+    """R_T = min(v_s / bound, STICK_SLIP_MAX G_TT) of the smooth stick-slip friction (m,), for the
+    friction bounds mu pbar_N and the tangential diagonal of the Delassus matrix G_TT.
+
+    Implements: the sticking branch f_T = -(mu f_N / v_s) v_T of the compliant friction law
+    (assumption A13) as a row compliance. The cap keeps the QP well conditioned for a contact
+    that carries almost no load (its friction is bounded by that tiny load anyway); a contact
+    without a bound, or without the law (v_s = 0, the rigid law), gets 0.
+    """
+    if v_s <= 0:
+        return np.zeros_like(bound)
+    R_max = STICK_SLIP_MAX * G_TT
+    return np.where(bound > 0.0, np.minimum(v_s / np.where(bound > 0.0, bound, 1.0), R_max), 0.0)
+
+
+def servo_rows(model, q_joint, q_ref, qd_ref, dt: float):
+    """(R_s, b_s): compliance and offset of the joints' servo rows (position control).
+
+    Implements: the position-controlled revolute joint of [COBRA] sec. "Simulation Setup"
+    (assumption A7): tau = kp (q_ref - q) + kd (qd_ref - qd) at the end of the step, as the
+    spring-damper row on e = q - q_ref with v_ref = qd_ref (the reference is taken at t + dt).
+    """
+    return spring_damper(model.servo_kp, model.servo_kd, dt, q_joint - q_ref, qd_ref)

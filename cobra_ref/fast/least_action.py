@@ -1,0 +1,90 @@
+"""The box QPs of the least-action loop, solved fast: certified active-set solves, OSQP kept warm.
+
+Helper (performance): ``FastBoxQP`` is a drop-in ``solve_qp`` for
+:func:`cobra_ref.least_action.solve_least_action`, which the reference step calls with a fresh
+OSQP solve per iterate (:func:`cobra_ref.qp.solve_box_qp`). Both return the minimiser of the
+same strictly convex QP to OSQP's tolerance (tests run them side by side):
+
+* the first iterate of every step is solved by OSQP, loosely (``LOOSE_EPS``, no polishing,
+  warm-started from the previous step's impulses): the design asks for an OSQP solve every
+  step. Its active set is then re-solved exactly and certified (:mod:`cobra_ref.fast.active_set`);
+* later iterates are first re-solved on the active set of the iterate they start from, and
+  certified;
+* where no certificate is found, OSQP solves the QP to ``cobra_ref.qp.EPS`` with polishing.
+
+OSQP instances are set up once per problem size n (dense upper triangle of P, A = identity)
+and afterwards only updated (P, q, bounds), so a step costs no OSQP setup.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import osqp
+from scipy import sparse
+
+from ..qp import EPS, MAX_ITER, BoxQPSolution, ContactSolveError
+from .active_set import held_at_bounds, solve_box
+
+LOOSE_EPS = 1e-5  # the first OSQP solve of a step: only a guess of the active set
+LOOSE_MAX_ITER = 200
+
+
+class FastBoxQP:
+    """``solve_qp(H, c, lo, hi, x0) -> BoxQPSolution`` with certified solves and warm OSQP (module docstring).
+
+    Call ``new_step()`` before each step's least-action loop: its first QP then goes to OSQP.
+    """
+
+    def __init__(self):
+        self._solvers: dict = {}
+        self._upper: dict = {}
+        self.first = True
+
+    def new_step(self) -> None:
+        """Mark the next QP as the first of a step (OSQP solves it).
+
+        Helper: called by the fast stepper before each step.
+        """
+        self.first = True
+
+    def __call__(self, H, c, lo, hi, x0) -> BoxQPSolution:
+        first, self.first = self.first, False
+        x0 = np.clip(x0, lo, hi)
+        solves, iterations, y = 0, 0, None
+        if first:
+            res = self._osqp(H, c, lo, hi, x0, loose=True)
+            solves, iterations = 1, res.info.iter
+            if res.info.status in ("solved", "solved inaccurate", "maximum iterations reached"):
+                x0, y = res.x, res.y
+        certified = solve_box(H, c, lo, hi, x0, EPS, EPS, guess=held_at_bounds(x0, lo, hi, y))
+        if certified is not None:
+            return BoxQPSolution(certified[0], np.zeros(len(c)), iterations, "solved", solves)
+        res = self._osqp(H, c, lo, hi, x0, loose=False)
+        if res.info.status not in ("solved", "solved inaccurate"):
+            raise ContactSolveError(f"OSQP status '{res.info.status}' after {res.info.iter} iterations "
+                                    f"({len(c)} rows)")
+        return BoxQPSolution(res.x, res.y, iterations + res.info.iter, res.info.status, solves + 1)
+
+    def _osqp(self, H, c, lo, hi, x0, loose: bool):
+        """One OSQP solve on the cached instance for this size, warm-started at x0."""
+        n = len(c)
+        key = (n, loose)
+        if key not in self._solvers:
+            rows, cols = np.triu_indices(n)
+            order = np.lexsort((rows, cols))  # column-major, as CSC stores it
+            self._upper[n] = (rows[order], cols[order])
+            indptr = np.concatenate([[0], np.cumsum(np.arange(1, n + 1))])
+            P = sparse.csc_matrix((H[self._upper[n]], self._upper[n][0], indptr), shape=(n, n))
+            solver = osqp.OSQP()
+            eps = LOOSE_EPS if loose else EPS
+            solver.setup(P=P, q=c, A=sparse.identity(n, format="csc"), l=lo, u=hi, eps_abs=eps, eps_rel=eps,
+                         polishing=not loose, polish_refine_iter=5, verbose=False, warm_starting=True,
+                         max_iter=LOOSE_MAX_ITER if loose else MAX_ITER)
+            if len(self._solvers) > 64:
+                self._solvers.clear()
+            self._solvers[key] = solver
+        else:
+            solver = self._solvers[key]
+            solver.update(Px=H[self._upper[n]], q=c, l=lo, u=hi)
+        solver.warm_start(x=x0)
+        return solver.solve(raise_error=False)

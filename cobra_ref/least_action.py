@@ -1,0 +1,423 @@
+"""The least-action problem of one time step: Delassus matrix, QP, and Coulomb's friction circle.
+
+Implements: [COBRA] eq. (5)-(6) for the impulses x = f dt of one step. The rows are the m
+contacts ([n, t1, t2] each, :mod:`cobra_ref.contact`) and, with the position servo, one row per
+joint; :mod:`cobra_ref.compliance` gives each row its compliance R and offset b::
+
+    G = J M^-1 J^T                                  eq. (5): Delassus matrix
+    c = J u_free + b                                eq. (5): the rows' velocity without impulses
+    min_x  1/2 x^T (G + R) x + x^T c                eq. (6): least action
+    s.t.   p_N >= 0,  ||p_T|| <= mu p_N              F_i of eq. (2): Coulomb's circle, per contact
+           |lambda_j| <= tau_max dt                  eq. (6) constraint (3), per servo row
+
+Its optimality conditions are eq. (2) at the velocity level. With g = (G + R) x + c, the law's
+residual on each row: a contact carries p_N > 0 only where g_N = 0 (its normal law holds) and
+none where g_N > 0 (it separates); friction sticks (g_T = 0) inside the circle and, on it,
+opposes the slip g_T with magnitude mu p_N (``kkt_residuals`` measures each condition).
+
+Friction (``solve_least_action``). Coulomb's law bounds friction by mu times the normal
+impulse, itself an unknown, so the problem is a fixed point of QPs: each QP bounds friction by
+mu pbar_N with a guess pbar_N (the De Saxce fixed point; eq. (6) with mu pbar_N in F_i), and
+the guess is right when the QP's p_N equals it. OSQP solves QPs, not cones, so each circle
+||p_T|| <= r = mu pbar_N is replaced by the square |p_t1'|, |p_t2'| <= r in the tangent frame
+(t1', t2') turned by an angle theta_i so that t1' points along the contact's friction: the
+square contains the circle and touches it at +-r t1', so a minimiser on that side of the square,
+or inside the circle, is the minimiser over the circle. The loop::
+
+    x <- the previous step's impulses;  (pbar_N, theta, x) <- guess(x)
+    repeat:  x <- the box QP with (pbar_N, theta), from x      (OSQP)
+             stop if the natural residual of x is below FP_TOL max p_N
+             (pbar_N, theta, x) <- guess(x)
+
+``guess`` solves the exact conditions of Coulomb's law on the active set of x (which contacts
+are released, which stick, which slide, which servo rows saturate) by Newton's method
+(``coulomb_newton``): when that set is right, the next QP reproduces its guesses and the loop
+stops (measured on the paper's gaits: about one QP per step). Where Newton's method fails or
+predicts normal impulses more than ``NEWTON_MAX_GROWTH`` times the QP's (a wrong active set),
+the plain update pbar_N <- p_N, theta_i <- angle of z_i is taken instead, with
+z_i = p_T,i - g_T,i / a_i (a_i the mean of contact i's tangential diagonal of G + R: where its
+friction would go without a bound). The natural residual of Coulomb's law::
+
+    max_i max( |p_N,i - pbar_N,i|,  |p_T,i - P_{mu_i p_N,i}(z_i)| )        (P_r: onto the disk r)
+
+is zero exactly when the bounds used the right normal impulses and every contact sticks
+(z_i inside its disk: g_T = 0) or slides with friction mu p_N opposing its slip. The friction
+is finally projected onto the circle of its own p_N, so ||p_T|| <= mu p_N holds on every step
+exactly. If ``max_iter`` iterates do not reach the tolerance, the last iterate, projected the
+same way, is the answer (a continuous function of the step's input that keeps friction), and
+the step's record says so.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from scipy.linalg import get_lapack_funcs
+
+from .compliance import STICK_SLIP_MAX, stick_slip_compliance
+from .qp import solve_box_qp
+
+FP_TOL = 1e-6  # natural residual of Coulomb's law, relative to max p_N
+FP_MAX = 50  # friction fixed-point iterates per step
+NEWTON_MAX_GROWTH = 3.0  # a Newton guess may at most triple the sum of the normal impulses
+NEWTON_TOL = 1e-8  # Newton's iterations stop when a step changes no impulse by more than this (relative)
+_gesv = get_lapack_funcs("gesv", (np.zeros(1),))
+
+
+class LeastAction(NamedTuple):
+    """The least-action problem of one step (module docstring); rows: 3m contact rows, then the servo rows."""
+
+    H: np.ndarray  # (n, n) G + R with every compliance that does not depend on pbar_N
+    c: np.ndarray  # (n,) J u_free + b
+    mu: np.ndarray  # (m,) friction coefficient per contact
+    lo: np.ndarray  # (n - 3m,) lower bounds of the servo rows
+    hi: np.ndarray  # (n - 3m,) upper bounds of the servo rows
+    stiction_velocity: float  # v_s of the smooth stick-slip friction (0: none, the rigid law)
+
+    @property
+    def m(self) -> int:
+        return len(self.mu)
+
+
+class LeastActionInfo(NamedTuple):
+    """How the least-action problem of one step was solved."""
+
+    converged: bool  # the friction fixed point reached FP_TOL
+    iterations: int  # fixed-point iterates (one box QP each)
+    qp_iterations: int  # OSQP's ADMM iterations, summed
+    qp_solves: int  # OSQP solves (the fast wing certifies some iterates without OSQP)
+    residual: float  # the natural residual of Coulomb's law at the end, relative to max p_N
+    status: str  # OSQP's status of the last iterate
+
+
+def delassus(J: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(G, M^-1 J^T): the Delassus matrix G = J M^-1 J^T of the rows J over the coordinates of M.
+
+    Implements: [COBRA] eq. (5), G = J_c M^-1 J_c^T, the inverse inertia the rows see.
+    """
+    Minv_JT = np.linalg.solve(M, J.T)
+    G = J @ Minv_JT
+    return 0.5 * (G + G.T), Minv_JT
+
+
+def solve_least_action(problem: LeastAction, x_start=None, solve_qp=solve_box_qp, max_iter: int = FP_MAX,
+                       tol: float = FP_TOL) -> tuple[np.ndarray, LeastActionInfo]:
+    """The impulses x of [COBRA] eq. (6) with Coulomb's circle, and how they were found.
+
+    Implements: [COBRA] eq. (6), its friction by the fixed point of the module docstring.
+    ``x_start``: where the loop starts (the previous step's impulses; default zero);
+    ``solve_qp(H, c, lo, hi, x0) -> BoxQPSolution``: the box-QP solver of each iterate (OSQP).
+    """
+    m, n = problem.m, len(problem.c)
+    if n == 0:  # no contact and no servo row: nothing to solve
+        return np.zeros(0), LeastActionInfo(True, 0, 0, 0, 0.0, "solved")
+    x = np.zeros(n) if x_start is None else np.asarray(x_start, dtype=float)
+    pbar_N, theta, x = guess(problem, x)
+    qp_iterations, qp_solves = 0, 0
+    for k in range(1, max_iter + 1):
+        # the box QP with the friction bound mu pbar_N, in tangent frames turned by theta
+        H = hessian(problem, pbar_N)
+        lo, hi = bounds(problem, pbar_N)
+        sol = solve_qp(turn_tangents(H, theta, m), turn(problem.c, theta, m), lo, hi, turn(x, theta, m))
+        x = turn(sol.x, -theta, m)
+        qp_iterations, qp_solves = qp_iterations + sol.iterations, qp_solves + sol.solves
+        # stop when the guesses are the ones this solution implies
+        p_N, p_T, z = coulomb_split(x, H @ x + problem.c, H, m)
+        residual = natural_residual(p_N, p_T, z, pbar_N, problem.mu)
+        if residual <= tol:
+            break
+        pbar_N, theta, x = guess(problem, x, theta)
+    return project_friction(x, problem.mu), LeastActionInfo(residual <= tol, k, qp_iterations, qp_solves,
+                                                            residual, sol.status)
+
+
+def hessian(problem: LeastAction, pbar_N: np.ndarray, R_T=None) -> np.ndarray:
+    """G + R of an iterate: the problem's H with the stick-slip compliance of pbar_N (or R_T) added.
+
+    Helper: the QP matrix of one fixed-point iterate (compliant law; the rigid law adds 0).
+    """
+    m, H = problem.m, problem.H.copy()
+    R_T = stick_slip(problem, pbar_N) if R_T is None else R_T
+    diagonal = H.reshape(-1)[::len(H) + 1]  # a view of H's diagonal
+    diagonal[1:3 * m:3] += R_T
+    diagonal[2:3 * m:3] += R_T
+    return H
+
+
+def stick_slip(problem: LeastAction, pbar_N: np.ndarray) -> np.ndarray:
+    """The friction rows' compliance (m,) that depends on pbar_N (compliant law; 0 for the rigid one).
+
+    Helper: :func:`cobra_ref.compliance.stick_slip_compliance` with this problem's v_s and G_TT
+    (the mean tangential diagonal of H).
+    """
+    return stick_slip_compliance(problem.stiction_velocity, problem.mu * pbar_N, _tangential_diagonal(problem.H, problem.m))
+
+
+def _tangential_diagonal(H: np.ndarray, m: int) -> np.ndarray:
+    """(m,) mean of each contact's two tangential diagonal entries of H."""
+    d = H.diagonal()
+    return 0.5 * (d[1:3 * m:3] + d[2:3 * m:3])
+
+
+def turn(v: np.ndarray, theta: np.ndarray, m: int) -> np.ndarray:
+    """v' = Q^T v: each contact's tangential pair (v_t1, v_t2) in the frame turned by theta_i.
+
+    Helper: Q is block diagonal, a rotation by theta_i on contact i's tangent rows and the
+    identity elsewhere; ``turn(v', -theta, m)`` = Q v' turns back. v: a vector, or a matrix
+    turned row by row.
+    """
+    out = v.copy()
+    shape = (m,) + (1,) * (v.ndim - 1)
+    c, s = np.cos(theta).reshape(shape), np.sin(theta).reshape(shape)
+    t1, t2 = v[1:3 * m:3], v[2:3 * m:3]
+    out[1:3 * m:3], out[2:3 * m:3] = c * t1 + s * t2, -s * t1 + c * t2
+    return out
+
+
+def turn_tangents(H: np.ndarray, theta: np.ndarray, m: int) -> np.ndarray:
+    """Q^T H Q for the rotation Q of ``turn``: rows, then columns turned.
+
+    Helper: the Hessian of the least-action problem in the turned tangent frames.
+    """
+    return turn(turn(H, theta, m).T, theta, m).T
+
+
+def bounds(problem: LeastAction, pbar_N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) of one iterate: p_N >= 0, |p_t1'|, |p_t2'| <= mu pbar_N, the servo rows' bounds.
+
+    Helper: the box of the module docstring's aligned square.
+    """
+    r = problem.mu * pbar_N
+    lo = np.column_stack([np.zeros_like(r), -r, -r]).ravel()
+    hi = np.column_stack([np.full_like(r, np.inf), r, r]).ravel()
+    return np.concatenate([lo, problem.lo]), np.concatenate([hi, problem.hi])
+
+
+def coulomb_split(x: np.ndarray, grad: np.ndarray, H: np.ndarray, m: int):
+    """(p_N (m,), p_T (m, 2), z (m, 2)): normal and friction impulses, and z = p_T - g_T / a.
+
+    Helper: z_i is where contact i's friction would go without its bound (module docstring);
+    a_i is the mean of its two tangential diagonal entries of H.
+    """
+    p = x[:3 * m].reshape(m, 3)
+    g_T = grad[:3 * m].reshape(m, 3)[:, 1:]
+    return p[:, 0], p[:, 1:], p[:, 1:] - g_T / _tangential_diagonal(H, m)[:, None]
+
+
+def project_disk(v: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Rows of v (k, 2) projected onto the disks of radii r (k,): v min(1, r / |v|).
+
+    Helper: Coulomb's friction set F_i of [COBRA] eq. (2) in the tangent plane.
+    """
+    norm = np.hypot(v[:, 0], v[:, 1])
+    scale = np.where(norm > r, r / np.where(norm > 0, norm, 1.0), 1.0)
+    return v * scale[:, None]
+
+
+def natural_residual(p_N, p_T, z, pbar_N, mu) -> float:
+    """max_i max(|p_N,i - pbar_N,i|, |p_T,i - P_{mu_i p_N,i}(z_i)|) / max p_N (module docstring).
+
+    Implements: the natural-map residual of the Coulomb friction problem: zero exactly at a
+    solution of eq. (6) with F_i = {||p_T|| <= mu p_N}.
+    """
+    if len(p_N) == 0:
+        return 0.0
+    scale = max(float(p_N.max()), 1e-300)
+    normal = np.abs(p_N - pbar_N).max()
+    friction = np.hypot(*(p_T - project_disk(z, mu * np.maximum(p_N, 0.0))).T).max()
+    return float(max(normal, friction) / scale)
+
+
+def project_friction(x: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """x with each contact's p_N clipped at 0 and p_T projected onto its circle ||p_T|| <= mu p_N.
+
+    Helper: the last operation on every step's impulses (module docstring).
+    """
+    m = len(mu)
+    x = x.copy()
+    p = x[:3 * m].reshape(m, 3)
+    p[:, 0] = np.maximum(p[:, 0], 0.0)
+    p[:, 1:] = project_disk(p[:, 1:], mu * p[:, 0])
+    return x
+
+
+def guess(problem: LeastAction, x: np.ndarray, theta=None):
+    """The next (pbar_N, theta) and where the next QP starts: Newton's guess on the active set of x,
+    else the plain update from x.
+
+    Helper: the update of the friction fixed point (module docstring). ``theta``: the angles x
+    was solved with, kept for sticking contacts by the plain update.
+    """
+    m = problem.m
+    H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
+    p_N, p_T, z = coulomb_split(x, H @ x + problem.c, H, m)
+    newton = coulomb_newton(problem, x)
+    if newton is not None and newton[0].sum() <= NEWTON_MAX_GROWTH * max(p_N.sum(), 1e-300):
+        return newton
+    theta = np.arctan2(p_T[:, 1], p_T[:, 0]) if theta is None else theta
+    sliding = np.hypot(*z.T) > problem.mu * np.maximum(p_N, 0.0)
+    return np.maximum(p_N, 0.0), np.where(sliding, np.arctan2(z[:, 1], z[:, 0]), theta), x
+
+
+class ActiveSet(NamedTuple):
+    """Which way each row of an iterate is held (``active_set``)."""
+
+    released: np.ndarray  # (m,) contacts with p_N = 0
+    sliding: np.ndarray  # (m,) contacts whose friction is on its circle
+    at_lo: np.ndarray  # (n - 3m,) servo rows held at their lower bound
+    at_hi: np.ndarray  # (n - 3m,) servo rows held at their upper bound
+
+
+def active_set(problem: LeastAction, x: np.ndarray, grad: np.ndarray, H: np.ndarray) -> ActiveSet:
+    """The active set of impulses x with gradient grad: released, sliding, saturated rows.
+
+    Helper: released = p_N below 1e-9 max p_N; sliding = |z_i| > mu p_N,i (the friction would
+    leave its circle without the bound); a servo row is held at a bound it sits on when its
+    gradient pushes against that bound.
+    """
+    m = problem.m
+    p_N, _, z = coulomb_split(x, grad, H, m)
+    released = p_N <= 1e-9 * max(float(p_N.max(initial=0.0)), 1e-300)
+    sliding = ~released & (np.hypot(*z.T) > problem.mu * p_N)
+    x_s, g_s = x[3 * m:], grad[3 * m:]
+    tol = 1e-9 * max(float(np.abs(problem.hi).max(initial=0.0)), 1e-300)
+    return ActiveSet(released, sliding, (x_s <= problem.lo + tol) & (g_s >= 0), (x_s >= problem.hi - tol) & (g_s <= 0))
+
+
+def coulomb_newton(problem: LeastAction, x: np.ndarray, rounds: int = 4, steps: int = 4):
+    """(pbar_N, theta, X) solving Coulomb's law exactly near x by Newton's method, or None.
+
+    Implements: the friction fixed point of [COBRA] eq. (6) on an active set. With the friction
+    angle theta_i of each sliding contact as an extra unknown, the conditions are a square
+    system in (x, theta_S)::
+
+        g_j = 0                              every free row j (g = (G + R(x)) x + c)
+        x_j = 0 (released contact), x_j = bound (saturated servo row)
+        p_T,i = mu_i p_N,i e(theta_i),  e_perp(theta_i) . g_T,i = 0      every sliding contact i
+
+    (friction on its circle, pointing against the slip), with R(x) the stick-slip compliance of
+    the compliant law, which depends on p_N. The active set starts as x's (``active_set``); after
+    ``steps`` Newton iterations, rows whose solution breaks their set's inequalities change set
+    (``_corrected``: a sticking contact outside its circle slides, a sliding one whose slip turns
+    sticks, a contact pulling is released, a released one that closes is engaged, a servo row
+    beyond its bound saturates, a saturated one pulled back is freed), for up to ``rounds``
+    rounds. None if the linear system is singular, the result not finite, or the set still
+    changes.
+    """
+    m, n = problem.m, len(x)
+    H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
+    act = active_set(problem, x, H @ x + problem.c, H)
+    for _ in range(rounds):
+        solved = _newton_on(problem, x, act, steps)
+        if solved is None:
+            return None
+        X, theta = solved
+        corrected = _corrected(problem, X, theta, act)
+        if all(np.array_equal(a, b) for a, b in zip(corrected, act)):
+            p_N, p_T = np.maximum(X[0:3 * m:3], 0.0), X[:3 * m].reshape(m, 3)[:, 1:]
+            return p_N, np.where(act.sliding, theta, np.arctan2(p_T[:, 1], p_T[:, 0])), X
+        act = corrected
+    return None
+
+
+def _newton_on(problem: LeastAction, x, act: ActiveSet, steps: int):
+    """(X, theta) from ``steps`` Newton iterations on the system of ``coulomb_newton`` for ``act``, or None."""
+    m, n = problem.m, len(x)
+    S = np.flatnonzero(act.sliding)
+    H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
+    p_T0, g_T0 = x[:3 * m].reshape(m, 3)[:, 1:], (H @ x + problem.c)[:3 * m].reshape(m, 3)[:, 1:]
+    # the sliding contacts' angles start at their friction's direction (against the slip if it has none yet)
+    start = np.where((np.hypot(*p_T0.T) > 0)[:, None], p_T0, -g_T0)
+    theta = np.arctan2(start[:, 1], start[:, 0])
+    pinned = np.concatenate([np.repeat(act.released, 3), act.at_lo | act.at_hi])
+    target = np.concatenate([np.zeros(3 * m), np.where(act.at_lo, problem.lo, problem.hi)])
+    X = x.copy()
+    for _ in range(steps):
+        K, F = _newton_system(problem, X, theta, S, pinned, target)
+        _, _, d, info = _gesv(K, -F)  # LAPACK's LU solve
+        if info != 0 or not np.all(np.isfinite(d)):
+            return None
+        X, theta[S] = X + d[:n], theta[S] + d[n:]
+        if np.abs(d).max() <= NEWTON_TOL * max(float(np.abs(X).max()), 1e-300):
+            break
+    return X, theta
+
+
+def _corrected(problem: LeastAction, X, theta, act: ActiveSet) -> ActiveSet:
+    """The active set after the changes that the Newton solution (X, theta) of ``act`` asks for."""
+    m = problem.m
+    g = hessian(problem, np.maximum(X[0:3 * m:3], 0.0)) @ X + problem.c
+    p = X[:3 * m].reshape(m, 3)
+    g3 = g[:3 * m].reshape(m, 3)
+    e = np.column_stack([np.cos(theta), np.sin(theta)])
+    tol = 1e-9 * max(float(np.abs(p[:, 0]).max(initial=0.0)), 1e-300)  # impulses
+    tol_g = 1e-9 * max(float(np.abs(g3).max(initial=0.0)), 1e-300)  # the laws' residuals (velocities)
+    outside = np.hypot(*p[:, 1:].T) > problem.mu * p[:, 0] + tol
+    turned = (e * g3[:, 1:]).sum(axis=1) > tol_g  # the slip runs along the friction: it should stick
+    engaged = act.released & (g3[:, 0] < -tol_g)  # a released contact that would close: it is engaged, sliding
+    released = (act.released & ~engaged) | (~act.released & (p[:, 0] < -tol))
+    sliding = ~released & ((act.sliding & ~turned) | (~act.sliding & outside) | engaged)
+    x_s, g_s, lo, hi = X[3 * m:], g[3 * m:], problem.lo, problem.hi
+    tol_s = 1e-9 * max(float(np.abs(hi).max(initial=0.0)), 1e-300)
+    tol_gs = 1e-9 * max(float(np.abs(g_s).max(initial=0.0)), 1e-300)
+    free = ~act.at_lo & ~act.at_hi
+    at_lo = (act.at_lo & (g_s >= -tol_gs)) | (free & (x_s < lo - tol_s))
+    at_hi = (act.at_hi & (g_s <= tol_gs)) | (free & (x_s > hi + tol_s))
+    return ActiveSet(released, sliding, at_lo, at_hi)
+
+
+def _newton_system(problem: LeastAction, X, theta, S, pinned, target):
+    """Jacobian K and residual F of ``coulomb_newton``'s system at (X, theta_S)."""
+    m, n, s, v_s = problem.m, len(X), len(S), problem.stiction_velocity
+    p_N = np.maximum(X[0:3 * m:3], 0.0)
+    R_T = stick_slip(problem, p_N)
+    H = hessian(problem, p_N, R_T)
+    g = H @ X + problem.c
+    K, F = np.zeros((n + s, n + s)), np.zeros(n + s)
+    K[:n, :n], F[:n] = H, g
+    # the stick-slip compliance R_T = v_s / (mu p_N) (where not capped): d g_T / d p_N = -v_s p_T / (mu p_N^2)
+    i = np.flatnonzero((R_T > 0) & (R_T < STICK_SLIP_MAX * _tangential_diagonal(problem.H, m)) & (p_N > 0))
+    dR = -v_s / (problem.mu[i] * p_N[i] ** 2)
+    K[3 * i + 1, 3 * i] += dR * X[3 * i + 1]
+    K[3 * i + 2, 3 * i] += dR * X[3 * i + 2]
+    # sliding contact i (row n + k): p_T = mu p_N e(theta) and e_perp . g_T = 0, d e_perp / d theta = -e
+    N, T1, T2, D = 3 * S, 3 * S + 1, 3 * S + 2, n + np.arange(s)
+    mu, c, sn = problem.mu[S], np.cos(theta[S]), np.sin(theta[S])
+    K[D, :n] = -sn[:, None] * K[T1, :n] + c[:, None] * K[T2, :n]
+    F[D] = -sn * g[T1] + c * g[T2]
+    K[D, D] = -(c * g[T1] + sn * g[T2])
+    K[T1], K[T2] = 0.0, 0.0
+    K[T1, T1] = K[T2, T2] = 1.0
+    K[T1, N], K[T2, N] = -mu * c, -mu * sn
+    K[T1, D], K[T2, D] = mu * X[N] * sn, -mu * X[N] * c
+    F[T1], F[T2] = X[T1] - mu * X[N] * c, X[T2] - mu * X[N] * sn
+    # released contacts and saturated servo rows are pinned at their targets
+    rows = np.flatnonzero(pinned)
+    K[rows] = 0.0
+    K[rows, rows] = 1.0
+    F[rows] = X[rows] - target[rows]
+    return K, F
+
+
+def kkt_residuals(problem: LeastAction, x: np.ndarray) -> dict:
+    """How well impulses x meet eq. (2) (the KKT conditions of eq. (6)), each a max over contacts.
+
+    Implements: the velocity-level conditions of [COBRA] eq. (2) for the compliant or rigid law:
+
+    * ``complementarity`` max_i |p_N,i g_N,i| [N s m/s] with g = (G + R) x + c the law's
+      residual (zero in contact, >= 0 when separating);
+    * ``cone_residual`` max_i (||p_T,i|| - mu_i p_N,i)_+ / max p_N: friction outside Coulomb's circle;
+    * ``coulomb_residual``: the natural residual of Coulomb's law (``natural_residual`` with
+      pbar_N = p_N), relative to max p_N: stick without slip, or slip against mu p_N.
+    """
+    m = problem.m
+    if m == 0:
+        return {"complementarity": 0.0, "cone_residual": 0.0, "coulomb_residual": 0.0}
+    H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
+    grad = H @ x + problem.c
+    p_N, p_T, z = coulomb_split(x, grad, H, m)
+    scale = max(float(p_N.max()), 1e-300)
+    cone = np.maximum(np.hypot(*p_T.T) - problem.mu * p_N, 0.0).max() / scale
+    return {"complementarity": float(np.abs(p_N * grad[0:3 * m:3]).max()), "cone_residual": float(cone),
+            "coulomb_residual": natural_residual(p_N, p_T, z, p_N, problem.mu)}

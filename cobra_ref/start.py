@@ -1,0 +1,127 @@
+"""Where a run starts: the robot at rest in its reference's first shape, settled on the ground.
+
+Implements: the start at rest of assumption A25. The robot is placed in the reference's t = 0
+shape (a 3-D shape laid on its flattest side), its lowest sphere 1 mm above the ground, the box
+beside its middle (A9); then the scene settles for ``SETTLE_TIME`` with the joints holding that
+shape, under the run's own contact law and servo, so that every sphere that carries weight
+rests on the ground and the run does not begin with a fall.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .kinematics import forward_kinematics
+from .model import Model
+from .quaternion import quat_exp, quat_mul
+from .robots import neutral_q
+from .step import StepSettings
+
+SETTLE_TIME = 0.3  # [s] the scene settles this long with the joints holding the start shape (A25)
+
+
+def initial_state(model: Model, reference, settings: StepSettings = StepSettings(), box_offset=None,
+                  box_gap: float = 0.05, box_direction=None, settle: float = SETTLE_TIME):
+    """(q0, qd0): the scene placed (``placed_state``) and settled for ``settle`` seconds.
+
+    Implements: the start at rest (assumption A25): the joints hold the reference's t = 0
+    shape while the robot and the box come to rest on the ground under ``settings``' contact
+    law and servo; what is left of their motion is returned as qd0 (of the order of 1e-5 m/s).
+    """
+    q = placed_state(model, reference, box_offset, box_gap, box_direction=box_direction)
+    qd = np.zeros(model.nv)
+    if settle > 0:
+        from .fast.stepper import FastStepper
+
+        hold = _Hold(reference(0.0)[0])
+        stepper = FastStepper(model, settings)
+        for k in range(int(round(settle / settings.dt))):
+            result = stepper.step(q, qd, k * settings.dt, hold)
+            q, qd = result.q, result.qd
+    return q, qd
+
+
+class _Hold:
+    """A reference that holds the joint angles q_0: (q_0, 0, 0) at every time."""
+
+    def __init__(self, q0):
+        self.q0 = np.asarray(q0, dtype=float)
+
+    def __call__(self, t: float):
+        zero = np.zeros_like(self.q0)
+        return self.q0, zero, zero
+
+
+def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05, clearance: float = 1e-3,
+                 box_direction=None) -> np.ndarray:
+    """q of the robot in the reference's t = 0 shape, head at the origin facing +x, lowest sphere
+    ``clearance`` above the ground; the box flat on the ground beside the middle of the snake
+    (assumption A9). ``initial_state`` lets this settle.
+
+    Box placement: the middle of the snake is the midpoint of the two middle bodies' centres of
+    mass (L5 and L6 for COBRA), and the concave side is the horizontal direction d from there
+    to the robot's centre of mass. The box's centre goes to middle + (r + a/2 + box_gap) d,
+    turned so that one face looks back at the robot: ``box_gap`` (default 0.05 m, A9) is then
+    the clearance between that face and the middle link's cylinder. ``box_offset`` = (dx, dy)
+    instead puts the box centre at middle + (dx, dy), axis-aligned; ``box_direction`` = (dx, dy)
+    replaces the concave side d by that horizontal direction (sidewinding pushes with its
+    leading side: ``reproduce`` passes the direction the gait travels).
+
+    The robot's base is first turned so that its start shape lies on its flattest side
+    (``_rest_on_flattest_side``; no turn for the planar rolling shapes).
+
+    Helper: the placement half of ``initial_state``.
+    """
+    q = neutral_q(model)
+    act_q = [model.q_idx[i].start for i, jt in enumerate(model.joint_type) if jt != "free"]
+    q[act_q] = reference(0.0)[0]
+    q[3:7] = _rest_on_flattest_side(model, q)
+    kin = forward_kinematics(model, q)
+    sph = model.spheres
+    bottoms = [kin.p[b][2] + (kin.R[b] @ c)[2] - r for b, c, r in zip(sph.body, sph.center, sph.radius)]
+    q[2] = clearance - min(bottoms)
+    if model.boxes:
+        box = model.boxes[0]
+        robot = [i for i in range(model.nb) if i != box.body]
+        com = np.array([kin.p[i] + kin.R[i] @ model.com[i] for i in robot])
+        mid_bodies = robot[len(robot) // 2 - 1:len(robot) // 2 + 1]
+        middle = com[mid_bodies].mean(axis=0)
+        iq = model.q_idx[box.body]
+        if box_offset is not None:
+            centre, yaw = middle[:2] + np.asarray(box_offset, dtype=float), 0.0
+        else:
+            d = (np.average(com, axis=0, weights=[model.mass[i] for i in robot]) - middle)[:2]
+            if box_direction is not None:
+                d = np.asarray(box_direction, dtype=float)[:2]
+                if not (np.all(np.isfinite(d)) and np.linalg.norm(d) > 0):
+                    raise ValueError(f"box_direction must be a finite non-zero (dx, dy), got {box_direction}")
+            elif np.linalg.norm(d) < 1e-3:  # a straight or symmetric S shape: use the body's left side
+                d = kin.R[mid_bodies[0]][:2, 1]
+            d = d / np.linalg.norm(d)
+            r = max(sph.radius[np.isin(sph.body, mid_bodies)])
+            centre, yaw = middle[:2] + (r + box.half[0] + box_gap) * d, np.arctan2(d[1], d[0])
+        q[iq.start:iq.start + 3] = [centre[0], centre[1], box.half[2]]
+        q[iq.start + 3:iq.start + 7] = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
+    return q
+
+
+def _rest_on_flattest_side(model: Model, q) -> np.ndarray:
+    """Base quaternion that turns the robot's best-fit plane horizontal (a 3-D start shape, such as
+    sidewinding's, then lies on its flattest side instead of standing on its tips and falling).
+
+    Helper: the plane through the robot bodies' centres of mass with the least variance across
+    it (its normal n is the last right singular vector of the centred points); the base turns by
+    the smallest rotation taking n (chosen with n_z >= 0) to z. A planar shape (every rolling
+    gait at t = 0) has n = z already, so it is left as it is.
+    """
+    kin = forward_kinematics(model, q)
+    robot = [i for i in range(model.nb) if not any(b.body == i for b in model.boxes)]
+    com = np.array([kin.p[i] + kin.R[i] @ model.com[i] for i in robot])
+    n = np.linalg.svd(com - com.mean(axis=0))[2][-1]
+    n = n if n[2] >= 0 else -n
+    axis = np.cross(n, [0.0, 0.0, 1.0])
+    if np.linalg.norm(axis) < 1e-9:
+        return q[3:7].copy()
+    angle = np.arctan2(np.linalg.norm(axis), n[2])
+    turn = quat_exp(angle * axis / np.linalg.norm(axis))
+    return quat_mul(turn, q[3:7])

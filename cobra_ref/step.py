@@ -1,0 +1,264 @@
+"""One time step of COBRA, the box and the ground, built from the textbook parts: the reference step.
+
+Implements: [COBRA] eq. (1)-(6) over one step dt, at the velocity level (semi-implicit Euler)::
+
+    M (u+ - u) = dt (tau_ext - h) + J^T x            eq. (1), impulses x = f dt of the rows J
+    q+ = q (+) dt u+                                  kinematics.integrate
+
+``step`` reads top to bottom:
+
+1. eq. (1): M = crba(q) and h = rnea(q, u, 0) (:mod:`cobra_ref.dynamics`);
+2. the joints (``StepSettings.servo``): ``"position"``, the paper's position-controlled joints:
+   every coordinate is free and each joint gets a servo row whose impulse is bounded by
+   tau_max dt (:func:`cobra_ref.compliance.servo_rows`); or ``"prescribed"`` (Simscape's
+   "motion provided"): each joint's u+ is the secant to the reference, (q_ref(t + dt) - q) / dt,
+   and only the base and the box are free (F); the torques are recovered from eq. (1);
+3. eq. (1) without impulses: u_free over the free coordinates;
+4. eq. (2)-(4): the contacts and their Jacobian J_c (:mod:`cobra_ref.contact`);
+5. eq. (5): the rows J = [J_c; J_servo] over F, the Delassus matrix G and c, with each row's
+   compliance and offset from its law (``StepSettings.contact``: ``"compliant"`` or ``"rigid"``);
+6. eq. (6): the impulses x, Coulomb's friction by a fixed point of OSQP solves
+   (:mod:`cobra_ref.least_action`), started from the previous step's impulses;
+7. u+ = u_free + M_FF^-1 J^T x, the joint torques, and q+.
+
+The faster path :class:`cobra_ref.fast.stepper.FastStepper` takes the same step with batched
+dynamics and contacts and certified QP solves; tests run both side by side.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from . import compliance
+from .compliance import LAWS
+from .contact import ROBOT_BOX, Contacts, contact_jacobian, find_contacts
+from .dynamics import bias_force, crba, potential_energy
+from .kinematics import forward_kinematics, integrate
+from .least_action import LeastAction, LeastActionInfo, delassus, kkt_residuals, solve_least_action
+from .model import Model
+
+SERVOS = ("position", "prescribed")
+
+
+class SimulationError(RuntimeError):
+    """A simulation that cannot go on; ``trajectory`` (if set) holds what was computed."""
+
+    def __init__(self, message: str, trajectory=None):
+        super().__init__(message)
+        self.trajectory = trajectory
+
+
+@dataclass(frozen=True)
+class StepSettings:
+    """How a step is taken: time step, contact law, joint servo, contact search margin.
+
+    ``dt`` [s] (assumption A14); ``contact``: ``"compliant"`` (the paper's high-fidelity
+    spring-damper contact, A12-A13) or ``"rigid"`` (eq. (2)-(6) as written, A15); ``servo``:
+    ``"position"`` (the paper's position-controlled joints, A7) or ``"prescribed"``; ``margin``
+    [m]: candidate contacts are those with a gap below it.
+    """
+
+    dt: float = 1e-3
+    contact: str = "compliant"
+    servo: str = "position"
+    margin: float = 0.01
+
+    def __post_init__(self):
+        if not (np.isfinite(self.dt) and self.dt > 0):
+            raise ValueError(f"dt must be positive and finite, got {self.dt}")
+        if self.contact not in LAWS:
+            raise ValueError(f"contact must be one of {', '.join(LAWS)}, got {self.contact!r}")
+        if self.servo not in SERVOS:
+            raise ValueError(f"servo must be one of {', '.join(SERVOS)}, got {self.servo!r}")
+        if not (np.isfinite(self.margin) and self.margin >= 0):
+            raise ValueError(f"margin must be finite and >= 0, got {self.margin}")
+
+
+class StepResult(NamedTuple):
+    """Everything one step computed (the state after it, and what the records need)."""
+
+    q: np.ndarray  # configuration after the step
+    qd: np.ndarray  # velocity after the step
+    tau: np.ndarray  # (n_joints,) joint torques over the step [N m]
+    contacts: Contacts  # the candidates at the start of the step
+    p: np.ndarray  # (3m,) contact impulses in the contact frames [N s]
+    w: np.ndarray  # (3m,) contact velocities after the step, J_c u+ [m/s]
+    info: LeastActionInfo
+    residuals: dict  # kkt_residuals of the impulses
+    approach: np.ndarray  # (m,) normal approach speed of each contact before the step, max(0, -J_N u) [m/s]
+    G_NN: np.ndarray  # (m,) the Delassus matrix's normal diagonal [1/kg]: 1 / G_NN is the mass the contact sees
+    kinetic: float  # kinetic energy at the start of the step [J]
+    potential: float  # gravitational potential energy at the start of the step [J]
+    elastic: float  # energy stored in compressed compliant contacts at the start of the step [J]
+    work_actuators: float  # dt tau . u_mid over the joints, u_mid = (u + u+) / 2 [J]
+    work_contacts: float  # x_c . J_c u_mid: work of the contact impulses [J]
+    memory: dict  # where the next step's friction fixed point starts (warm_start_memory)
+
+
+def step(model: Model, q, qd, t: float, reference, settings: StepSettings = StepSettings(),
+         previous: dict | None = None, tau_ext=None) -> StepResult:
+    """One step from (q, qd) at time t with the joint reference ``reference(t) -> (q, qd, qdd)``.
+
+    Implements: [COBRA] eq. (1)-(6) over one step (module docstring, steps 1-7). ``previous``:
+    where the friction fixed point starts (``StepResult.memory`` of the last step; None: from
+    zero); ``tau_ext`` (nv,): a generalized force held over the step (default none).
+    """
+    dt, joints = settings.dt, joint_coordinates(model)
+    tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
+    # Step 1: eq. (1), M(q) and h(q, u)
+    kin = forward_kinematics(model, q)
+    M, h = crba(model, q), bias_force(model, q, qd)
+    # Step 2: the joints -- free coordinates F; prescribed joints move to their reference
+    u_next = qd.copy()
+    if settings.servo == "prescribed":
+        u_next[joints.v] = (_reference(reference, t + dt)[0] - q[joints.q]) / dt
+        F = np.setdiff1d(np.arange(model.nv), joints.v)
+    else:
+        F = np.arange(model.nv)
+    P = np.setdiff1d(np.arange(model.nv), F)
+    # Step 3: eq. (1) without impulses for the free coordinates: M_FF (u_free - u)_F = rhs
+    rhs = dt * (tau_ext - h)[F] - M[np.ix_(F, P)] @ (u_next[P] - qd[P])
+    u_next[F] = qd[F] + np.linalg.solve(M[np.ix_(F, F)], rhs)
+    # Step 4: eq. (2)-(4), the contacts and J_c
+    contacts = find_contacts(model, q, settings.margin, kin)
+    J_c = contact_jacobian(model, q, contacts, kin)
+    # Step 5: eq. (5), the rows J over F, the Delassus matrix G and the least-action problem
+    J = np.vstack([J_c, _servo_jacobian(model, joints, settings)])
+    G, Minv_JT = delassus(J[:, F], M[np.ix_(F, F)])
+    problem = least_action_problem(model, G, J @ u_next, contacts, q, t, reference, settings)
+    # Step 6: eq. (6), the impulses, starting from the previous step's
+    x, info = solve_least_action(problem, warm_start(contacts, previous, len(problem.c)))
+    # Step 7: the velocity after the step, the joint torques, the position
+    u_next[F] += Minv_JT @ x
+    p = x[:3 * contacts.m]
+    if settings.servo == "prescribed":
+        tau = (M @ (u_next - qd) / dt + h - J_c.T @ p / dt - tau_ext)[joints.v]
+    else:
+        tau = x[3 * contacts.m:] / dt
+    return StepResult(integrate(model, q, u_next, dt), u_next, tau, contacts, p, J_c @ u_next, info,
+                      kkt_residuals(problem, x), approach_speed(J_c, qd), np.diag(G)[:3 * contacts.m:3],
+                      *energies(model, qd, u_next, M, contacts, J_c, p, tau, potential_energy(model, q), settings),
+                      warm_start_memory(contacts, x))
+
+
+class JointCoordinates(NamedTuple):
+    """Where the revolute joints sit in q and qd, and their limits."""
+
+    q: np.ndarray  # (n,) indices into q
+    v: np.ndarray  # (n,) indices into qd
+    tau_max: np.ndarray  # (n,) [N m]
+    q_max: np.ndarray  # (n,) [rad]
+    qd_max: np.ndarray  # (n,) [rad/s] (inf: none)
+
+
+def joint_coordinates(model: Model) -> JointCoordinates:
+    """The actuated (revolute) joints of the model: their q and qd indices and limits.
+
+    Helper: the joints the servo drives (a model may have none: a lone ball or box).
+    """
+    revolute = [i for i, jt in enumerate(model.joint_type) if jt != "free"]
+    qd_limit = model.qd_limit or (np.inf,) * model.nb
+    return JointCoordinates(np.array([model.q_idx[i].start for i in revolute], dtype=int),
+                            np.array([model.v_idx[i].start for i in revolute], dtype=int),
+                            np.array([model.tau_limit[i] for i in revolute], dtype=float),
+                            np.array([model.q_limit[i] for i in revolute], dtype=float),
+                            np.array([qd_limit[i] for i in revolute], dtype=float))
+
+
+def _servo_jacobian(model: Model, joints: JointCoordinates, settings: StepSettings) -> np.ndarray:
+    """The servo rows' Jacobian: one unit row per joint rate (none for prescribed joints)."""
+    if settings.servo == "prescribed":
+        return np.zeros((0, model.nv))
+    return np.eye(model.nv)[joints.v]
+
+
+def least_action_problem(model: Model, G, c_free, contacts: Contacts, q, t: float, reference,
+                         settings: StepSettings) -> LeastAction:
+    """The least-action problem of eq. (6): H = G + R and c = J u_free + b over the rows.
+
+    Implements: [COBRA] eq. (5)-(6) with each row's compliance R and offset b
+    (:mod:`cobra_ref.compliance`): contact normals and friction under ``settings.contact``,
+    then the servo rows (position servo), bounded by tau_max dt.
+    """
+    m, dt, law = contacts.m, settings.dt, settings.contact
+    d = np.diag(G)
+    R_N, b_N = compliance.normal_rows(model, contacts.g, d[0:3 * m:3], dt, law)
+    R, b = np.zeros(len(d)), np.zeros(len(d))
+    R[0:3 * m:3], b[0:3 * m:3] = R_N, b_N
+    R[1:3 * m:3] = compliance.tangential_compliance(d[1:3 * m:3], law)
+    R[2:3 * m:3] = compliance.tangential_compliance(d[2:3 * m:3], law)
+    lo = hi = np.zeros(0)
+    if settings.servo == "position":
+        joints = joint_coordinates(model)
+        q_ref, qd_ref, _ = _reference(reference, t + dt)
+        R[3 * m:], b[3 * m:] = compliance.servo_rows(model, q[joints.q], q_ref, qd_ref, dt)
+        lo, hi = -joints.tau_max * dt, joints.tau_max * dt
+    mu = np.where(contacts.kind == ROBOT_BOX, model.mu_rb, model.mu)
+    v_s = model.stiction_velocity if law == "compliant" else 0.0
+    return LeastAction(G + np.diag(R), c_free + b, mu, lo, hi, v_s)
+
+
+def warm_start(contacts: Contacts, previous: dict | None, n: int) -> np.ndarray:
+    """x (n,) where the friction fixed point starts: each row's impulse in the previous step.
+
+    Helper: ``previous`` (``warm_start_memory``) maps a contact key to its world impulse vector,
+    read in this step's contact frame; a new contact starts at 0; the servo rows start at the
+    previous step's servo impulses.
+    """
+    x = np.zeros(n)
+    if not previous:
+        return x
+    for i, key in enumerate(contacts.keys()):
+        if key in previous["contacts"]:
+            x[3 * i:3 * i + 3] = contacts.frame[i].T @ previous["contacts"][key]
+    servo = previous["servo"]
+    if len(servo) == n - 3 * contacts.m:
+        x[3 * contacts.m:] = servo
+    return x
+
+
+def warm_start_memory(contacts: Contacts, x: np.ndarray) -> dict:
+    """What the next step's ``warm_start`` reads: the world impulse vector (3,) of each contact that
+    carried one, by contact key, and the servo rows' impulses.
+
+    Helper: the memory of the friction fixed point from one step to the next.
+    """
+    m = contacts.m
+    P = np.einsum("kij,kj->ki", contacts.frame, x[:3 * m].reshape(m, 3))
+    return {"contacts": {key: P[i] for i, key in enumerate(contacts.keys()) if x[3 * i] > 0.0},
+            "servo": x[3 * m:].copy()}
+
+
+def approach_speed(J_c: np.ndarray, qd) -> np.ndarray:
+    """(m,) normal approach speed of each contact before the step, max(0, -J_N u) [m/s].
+
+    Implements: the gap rate g' = J_c u of [COBRA] eq. (4) on the normal rows, where it is
+    negative (closing): the paper's non-impulsive condition asks for no contact force while it is.
+    """
+    return np.maximum(-(J_c[0::3] @ qd), 0.0)
+
+
+def energies(model, qd, u_next, M, contacts, J_c, p, tau, potential: float, settings: StepSettings):
+    """(kinetic, potential, elastic, work_actuators, work_contacts) of one step (StepResult).
+
+    Helper: the energy ledger, at the midpoint velocity u_mid = (u + u+) / 2, for which
+    Delta KE = u_mid . M (u+ - u) exactly at fixed M; the elastic energy is
+    sum 1/2 k g^2 over the compressed contacts (g < 0) of the compliant law.
+    """
+    u_mid = 0.5 * (qd + u_next)
+    elastic = 0.0
+    if settings.contact == "compliant":
+        elastic = float(0.5 * model.contact_stiffness * np.sum(np.minimum(contacts.g, 0.0) ** 2))
+    return (0.5 * float(qd @ M @ qd), potential, elastic, settings.dt * float(tau @ u_mid[joint_coordinates(model).v]),
+            float(p @ (J_c @ u_mid)))
+
+
+def _reference(reference, t: float):
+    """The reference at t, or a SimulationError naming the time where it stops being finite."""
+    values = [np.asarray(v, dtype=float) for v in reference(t)]
+    if not all(np.all(np.isfinite(v)) for v in values):
+        raise SimulationError(f"the joint reference is not finite at t = {t:.4f} s: {values[0]}")
+    return values

@@ -1,0 +1,108 @@
+"""The record of a simulation: states, torques, per-step solver and energy records, the contact log.
+
+Helper: what ``simulate`` returns and ``cobra-ref simulate`` writes (NPZ, every array named;
+numpy users open it with ``np.load``). Arrays of length N + 1 hold states (one per time t_k),
+arrays of length N hold steps (from t_k to t_k+1):
+
+* ``t``, ``q``, ``qd``, ``box_pose`` (x y z qw qx qy qz); ``tau`` (N, n_joints) joint torques;
+* per step (``STEP_KEYS``): the friction fixed point (``fp_converged`` 1/0, ``fp_iter`` iterates,
+  ``qp_iter`` OSQP iterations, ``qp_solves`` OSQP solves, ``coulomb_residual``), the contact
+  conditions (``complementarity``, ``cone_residual`` against Coulomb's circle,
+  ``max_penetration`` [m], ``n_contacts``), the limits (``tau_excess`` = max |tau| - tau_max,
+  ``q_excess``, ``qd_excess`` = max |qd| - qd_max, <= 0 within them; ``tracking_error`` =
+  max |q - q_ref| at the step's end [rad]), the energy ledger (``kinetic``, ``potential``,
+  ``elastic`` at the step's start, ``work_actuators``, ``work_contacts`` over the step [J]) and
+  the impacts (``impact_count``, ``impact_impulse`` [N s], ``impact_energy`` [J], see
+  :func:`cobra_ref.analysis.impacts`);
+* the contact log (``CONTACT_KEYS``), one row per contact that carries a normal impulse in a
+  step: ``contact_step``, ``contact_kind`` (0 robot-ground, 1 robot-box, 2 box-ground),
+  ``contact_body`` (body A: the robot link, or the box for box-ground), ``contact_point``
+  (world, the midpoint of the witness points), ``contact_normal`` (world, from B to A),
+  ``contact_force`` (world, the force ON body A BY body B: frame @ p / dt; the box feels minus
+  the robot-box rows) and ``contact_onset_speed`` (the approach speed [m/s] of a contact in
+  its first loaded step, 0 afterwards).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .output import atomic_write
+
+STEP_KEYS = ("fp_converged", "fp_iter", "qp_iter", "qp_solves", "coulomb_residual", "complementarity",
+             "cone_residual", "max_penetration", "n_contacts", "tau_excess", "q_excess", "qd_excess",
+             "tracking_error", "kinetic", "potential", "elastic", "work_actuators", "work_contacts",
+             "impact_count", "impact_impulse", "impact_energy")
+CONTACT_KEYS = ("contact_step", "contact_kind", "contact_body", "contact_point", "contact_normal", "contact_force",
+                "contact_onset_speed")
+
+
+@dataclass
+class Trajectory:
+    """Everything a simulation computed (complete, or up to a failure: see ``error``)."""
+
+    dt: float
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    tau: np.ndarray
+    box_pose: np.ndarray
+    steps: dict
+    contacts: dict
+    wall_time: float = 0.0
+    error: str = ""
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0]) if len(self.t) else 0.0
+
+    def summary(self) -> dict:
+        """The one-line JSON summary of ``cobra-ref simulate``.
+
+        Helper: the box's displacement, the worst contact conditions, the friction fixed point's
+        convergence, the largest torque, speed.
+        """
+        s = self.steps
+        d = self.box_pose[-1, :2] - self.box_pose[0, :2] if len(self.box_pose) else np.zeros(2)
+        n = max(len(self.tau), 1)
+        return {
+            "box_displacement": [round(float(x), 6) for x in d],
+            "max_penetration": float(np.max(s["max_penetration"], initial=0.0)),
+            "max_cone_residual": float(np.max(s["cone_residual"], initial=0.0)),
+            "max_coulomb_residual": float(np.max(s["coulomb_residual"], initial=0.0)),
+            "fixed_point_converged": float(np.sum(s["fp_converged"])) / n,
+            "max_abs_tau": float(np.max(np.abs(self.tau), initial=0.0)),
+            "impacts_per_second": float(np.sum(s["impact_count"])) / max(self.duration, 1e-300),
+            "real_time_factor": round(self.duration / self.wall_time, 4) if self.wall_time > 0 else None,
+            "steps": int(len(self.tau)),
+            "error": self.error or None,
+        }
+
+    @classmethod
+    def from_npz(cls, path: str) -> "Trajectory":
+        """Read back what ``to_npz`` wrote.
+
+        Helper: the cache of the figure runs, and users' own analysis.
+        """
+        with np.load(path, allow_pickle=False) as z:
+            return cls(float(z["dt"]), z["t"], z["q"], z["qd"], z["tau"], z["box_pose"],
+                       {k: z[k] for k in STEP_KEYS}, {k: z[k] for k in CONTACT_KEYS},
+                       float(z["wall_time"]), str(z["error"]), json.loads(str(z["meta"])))
+
+    def to_npz(self, path: str) -> None:
+        """Write every array to an NPZ atomically (temporary file + rename: never half-written).
+
+        Helper: ``cobra-ref simulate --out`` and the figure runs' cache.
+        """
+        directory = os.path.dirname(os.path.abspath(path)) or "."
+        if not os.path.isdir(directory):
+            raise OSError(f"output directory does not exist: {directory}")
+        arrays = dict(t=self.t, q=self.q, qd=self.qd, tau=self.tau, box_pose=self.box_pose, dt=np.array(self.dt),
+                      wall_time=np.array(self.wall_time),
+                      meta=np.array(json.dumps(self.meta)), error=np.array(self.error), **self.steps, **self.contacts)
+        atomic_write(path, lambda tmp: np.savez_compressed(tmp, **arrays))

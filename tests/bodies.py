@@ -1,0 +1,82 @@
+"""Small models for worked examples: one free rigid body (a ball, a box), and a sphere beside a box.
+
+A free body has no revolute joint, so the servo has nothing to drive and every test below is
+a hand-solvable rigid body on the ground (M of its coordinates is blockdiag(m 1, I_com)).
+"""
+
+import numpy as np
+
+from cobra_ref.fast.stepper import FastStepper
+from cobra_ref.model import BoxGeom, Model, SphereSet
+from cobra_ref.step import StepSettings, step
+
+GRAVITY = 9.81  # [m/s^2]
+BALL_MASS, BALL_RADIUS = 1.0, 0.1  # [kg], [m]
+BOX_MASS, BOX_SIDE = 0.5, 0.1  # [kg], [m]
+NO_SPHERES = SphereSet(body=np.zeros(0, dtype=int), center=np.zeros((0, 3)), radius=np.zeros(0))
+
+
+def free_body(name, mass, I_com, spheres=NO_SPHERES, boxes=(), gravity=(0.0, 0.0, -GRAVITY), **law):
+    """One rigid body on a free joint, centre of mass at its origin; ``law``: mu, contact_stiffness, ..."""
+    return Model(name=name, body_names=(name,), joint_names=("free",), parent=(-1,), joint_type=("free",),
+                 tree_pos=(np.zeros(3),), tree_rot=(np.eye(3),), mass=(float(mass),), com=(np.zeros(3),),
+                 I_com=(np.asarray(I_com, dtype=float),), gravity=np.asarray(gravity, dtype=float),
+                 q_limit=(np.inf,), tau_limit=(np.inf,), spheres=spheres, boxes=boxes, **law)
+
+
+def ball_inertia(mass=BALL_MASS, radius=BALL_RADIUS):
+    return 0.4 * mass * radius**2 * np.eye(3)  # solid sphere, 2/5 m r^2
+
+
+def box_inertia(mass=BOX_MASS, side=BOX_SIDE):
+    return mass * side**2 / 6 * np.eye(3)  # cube, m a^2 / 6
+
+
+def ball(mass=BALL_MASS, radius=BALL_RADIUS, **law):
+    spheres = SphereSet(body=np.zeros(1, dtype=int), center=np.zeros((1, 3)), radius=np.array([radius]))
+    return free_body("ball", mass, ball_inertia(mass, radius), spheres, **law)
+
+
+def box(**law):
+    return free_body("box", BOX_MASS, box_inertia(), boxes=(BoxGeom(body=0, half=np.full(3, BOX_SIDE / 2)),), **law)
+
+
+def at_height(model, height, v=(0.0, 0.0, 0.0), w=(0.0, 0.0, 0.0)):
+    """(q, qd): the body's origin at (0, 0, height), unturned, with linear velocity v and body angular velocity w."""
+    q = np.zeros(model.nq)
+    q[:7] = [0.0, 0.0, height, 1.0, 0.0, 0.0, 0.0]
+    qd = np.zeros(model.nv)
+    qd[:3], qd[3:6] = v, w
+    return q, qd
+
+
+def no_joints(t):
+    """The reference of a model without revolute joints."""
+    return np.zeros(0), np.zeros(0), np.zeros(0)
+
+
+def run(model, q, qd, n_steps, settings=StepSettings(), stepper="fast", tau_ext=None, reference=no_joints):
+    """Take n_steps steps from (q, qd) at t = 0; returns the final (q, qd) and every StepResult."""
+    fast, previous, results = FastStepper(model, settings), None, []
+    for k in range(n_steps):
+        t = k * settings.dt
+        if stepper == "fast":
+            res = fast.step(q, qd, t, reference, tau_ext)
+        else:
+            res = step(model, q, qd, t, reference, settings, previous, tau_ext)
+            previous = res.memory
+        q, qd = res.q, res.qd
+        results.append(res)
+    return q, qd, results
+
+
+def sphere_and_box(mu, sphere_mass=0.5, sphere_radius=0.03, mu_robot_box=None):
+    """A free sphere (body 0, a 'robot link') and the box (body 1), each on its own free joint."""
+    sphere = SphereSet(body=np.zeros(1, dtype=int), center=np.zeros((1, 3)), radius=np.array([sphere_radius]))
+    return Model(name="sphere_box", body_names=("sphere", "box"), joint_names=("free", "box_free"),
+                 parent=(-1, -1), joint_type=("free", "free"), tree_pos=(np.zeros(3),) * 2,
+                 tree_rot=(np.eye(3),) * 2, mass=(sphere_mass, BOX_MASS), com=(np.zeros(3),) * 2,
+                 I_com=(ball_inertia(sphere_mass, sphere_radius), box_inertia()),
+                 gravity=np.array([0.0, 0.0, -GRAVITY]), q_limit=(np.inf,) * 2, tau_limit=(np.inf,) * 2,
+                 spheres=sphere, boxes=(BoxGeom(body=1, half=np.full(3, BOX_SIDE / 2)),), mu=mu,
+                 mu_robot_box=mu_robot_box)
