@@ -22,7 +22,7 @@ from .model import Model, ModelError
 from .params import CobraParameters
 from .robots import chain, cobra_model, neutral_q, random_state
 
-__version__ = "0.1.0"
+__version__ = "0.2.0.dev0"
 
 __all__ = [
     "CobraParameters", "Model", "ModelError", "bias_force", "body_jacobian", "body_kinetic_energies",

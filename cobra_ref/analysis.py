@@ -29,7 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .fast.contacts import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND
+from .contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND
 from .gaits import N_JOINTS
 from .quaternion import quat_to_rot
 

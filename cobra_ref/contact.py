@@ -63,14 +63,14 @@ def find_contacts(model: Model, q, margin: float, kin: Kinematics | None = None)
     """
     kin = kin or forward_kinematics(model, q)
     sph = model.spheres
-    centers = [kin.p[b] + kin.R[b] @ c for b, c in zip(sph.body, sph.center)]
+    centers = [kin.o[b] + kin.R[b] @ c for b, c in zip(sph.body, sph.center)]
     found = []  # (kind, body A, body B, feature, Gap)
     for s, (body, center) in enumerate(zip(sph.body, centers)):
         gap = gaps.sphere_plane_gap(center, sph.radius[s])
         if gap.g < margin:
             found.append((ROBOT_GROUND, body, -1, s, gap))
     for box in model.boxes:
-        R_b, p_b = kin.R[box.body], kin.p[box.body]
+        R_b, p_b = kin.R[box.body], kin.o[box.body]
         for s, (body, center) in enumerate(zip(sph.body, centers)):
             gap = gaps.sphere_box_gap(center, sph.radius[s], R_b, p_b, box.half)
             if gap.g < margin:
@@ -109,5 +109,5 @@ def contact_jacobian(model: Model, q, contacts: Contacts, kin: Kinematics | None
 
 def _world_point_jacobian(model, q, kin, body: int, x_world: np.ndarray) -> np.ndarray:
     """Jacobian (3, nv) of the point of ``body`` that is at world position x_world now."""
-    x_body = kin.R[body].T @ (x_world - kin.p[body])
+    x_body = kin.R[body].T @ (x_world - kin.o[body])
     return point_jacobian(model, q, body, x_body, kin)

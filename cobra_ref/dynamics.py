@@ -124,8 +124,8 @@ def potential_energy(model: Model, q) -> float:
     Implements: the gravity potential whose gradient is g(q) in [COBRA] eq. (1).
     """
     kin = forward_kinematics(model, q)
-    return float(-sum(m * model.gravity @ (p + R @ c)
-                      for m, c, R, p in zip(model.mass, model.com, kin.R, kin.p)))
+    return float(-sum(m * model.gravity @ (o + R @ c)
+                      for m, c, R, o in zip(model.mass, model.com, kin.R, kin.o)))
 
 
 def spatial_momentum(model: Model, q, qd) -> np.ndarray:

@@ -23,7 +23,7 @@ class Kinematics(NamedTuple):
     X_up: list  # ^iX_lambda(i), (6, 6)
     X_0: list  # ^iX_0 (world -> body i coordinates), (6, 6)
     R: list  # orientation of body i in world (body -> world rotation), (3, 3)
-    p: list  # position of body i's origin in world, (3,)
+    o: list  # position of body i's origin in world, (3,)
     S: list  # motion subspace of joint i in body coordinates, (6, n_i)
     c_J: list  # velocity-product term of joint i, (6,)
     v: list  # spatial velocity of body i in body coordinates, (6,) (zeros if qd is None)
@@ -37,29 +37,29 @@ def forward_kinematics(model: Model, q, qd=None) -> Kinematics:
         X_up[i] = X_J(q_i) X_tree[i]
         X_0[i]  = X_up[i] X_0[parent]
         v[i]    = X_up[i] v[parent] + S_i qd_i
-        R[i]    = R[parent] R_tree[i] R_J(q_i),  p[i] = p[parent] + R[parent] p_tree[i]
+        R[i]    = R[parent] R_tree[i] R_J(q_i),  o[i] = o[parent] + R[parent] p_tree[i]
     """
     q = model.check_q(q)
     qd = np.zeros(model.nv) if qd is None else model.check_qd(qd)
-    X_up, X_0, R, p, S, c_J, v = ([] for _ in range(7))
+    X_up, X_0, R, o, S, c_J, v = ([] for _ in range(7))
     for i in range(model.nb):
         q_i, qd_i = q[model.q_idx[i]], qd[model.v_idx[i]]
         X_J, S_i, c_i = jcalc(model.joint_type[i], q_i, qd_i)
         X_up.append(X_J @ model.X_tree[i])
         parent = model.parent[i]
         # poses from 3x3 rotations (better rounding than 6x6 products); E = R_J^T is X_J's block
-        R_p, p_p = (np.eye(3), np.zeros(3)) if parent < 0 else (R[parent], p[parent])
+        R_p, o_p = (np.eye(3), np.zeros(3)) if parent < 0 else (R[parent], o[parent])
         R.append(R_p @ model.tree_rot[i] @ X_J[:3, :3].T)
         if model.joint_type[i] == "free":
-            p.append(p_p + R_p @ (model.tree_pos[i] + model.tree_rot[i] @ q_i[:3]))
+            o.append(o_p + R_p @ (model.tree_pos[i] + model.tree_rot[i] @ q_i[:3]))
         else:
-            p.append(p_p + R_p @ model.tree_pos[i])
-        X_0.append(plux(R[i].T, p[i]))
+            o.append(o_p + R_p @ model.tree_pos[i])
+        X_0.append(plux(R[i].T, o[i]))
         v_p = np.zeros(6) if parent < 0 else v[parent]
         v.append(X_up[i] @ v_p + S_i @ qd_i)
         S.append(S_i)
         c_J.append(c_i)
-    return Kinematics(X_up, X_0, R, p, S, c_J, v)
+    return Kinematics(X_up, X_0, R, o, S, c_J, v)
 
 
 def ancestors(model: Model, i: int) -> list[int]:

@@ -61,6 +61,7 @@ from .qp import solve_box_qp
 FP_TOL = 1e-6  # natural residual of Coulomb's law, relative to max p_N
 FP_MAX = 50  # friction fixed-point iterates per step
 NEWTON_MAX_GROWTH = 3.0  # a Newton guess may at most triple the sum of the normal impulses
+RELEASED = 1e-9  # a contact whose normal impulse is below RELEASED max p_N carries nothing
 NEWTON_TOL = 1e-8  # Newton's iterations stop when a step changes no impulse by more than this (relative)
 _gesv = get_lapack_funcs("gesv", (np.zeros(1),))
 
@@ -232,12 +233,13 @@ def natural_residual(p_N, p_T, z, pbar_N, mu) -> float:
 def project_friction(x: np.ndarray, mu: np.ndarray) -> np.ndarray:
     """x with each contact's p_N clipped at 0 and p_T projected onto its circle ||p_T|| <= mu p_N.
 
-    Helper: the last operation on every step's impulses (module docstring).
+    Helper: the last operation on every step's impulses (module docstring). Normal impulses
+    below ``RELEASED`` max p_N (a solver's rounding on a contact that carries nothing) are 0.
     """
     m = len(mu)
     x = x.copy()
     p = x[:3 * m].reshape(m, 3)
-    p[:, 0] = np.maximum(p[:, 0], 0.0)
+    p[:, 0] = np.where(p[:, 0] > RELEASED * p[:, 0].max(initial=0.0), p[:, 0], 0.0)
     p[:, 1:] = project_disk(p[:, 1:], mu * p[:, 0])
     return x
 
@@ -253,7 +255,7 @@ def guess(problem: LeastAction, x: np.ndarray, theta=None):
     H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
     p_N, p_T, z = coulomb_split(x, H @ x + problem.c, H, m)
     newton = coulomb_newton(problem, x)
-    if newton is not None and newton[0].sum() <= NEWTON_MAX_GROWTH * max(p_N.sum(), 1e-300):
+    if newton is not None and (p_N.sum() <= 0.0 or newton[0].sum() <= NEWTON_MAX_GROWTH * p_N.sum()):
         return newton
     theta = np.arctan2(p_T[:, 1], p_T[:, 0]) if theta is None else theta
     sliding = np.hypot(*z.T) > problem.mu * np.maximum(p_N, 0.0)
@@ -272,13 +274,13 @@ class ActiveSet(NamedTuple):
 def active_set(problem: LeastAction, x: np.ndarray, grad: np.ndarray, H: np.ndarray) -> ActiveSet:
     """The active set of impulses x with gradient grad: released, sliding, saturated rows.
 
-    Helper: released = p_N below 1e-9 max p_N; sliding = |z_i| > mu p_N,i (the friction would
+    Helper: released = p_N below RELEASED max p_N; sliding = |z_i| > mu p_N,i (the friction would
     leave its circle without the bound); a servo row is held at a bound it sits on when its
     gradient pushes against that bound.
     """
     m = problem.m
     p_N, _, z = coulomb_split(x, grad, H, m)
-    released = p_N <= 1e-9 * max(float(p_N.max(initial=0.0)), 1e-300)
+    released = p_N <= RELEASED * max(float(p_N.max(initial=0.0)), 1e-300)
     sliding = ~released & (np.hypot(*z.T) > problem.mu * p_N)
     x_s, g_s = x[3 * m:], grad[3 * m:]
     tol = 1e-9 * max(float(np.abs(problem.hi).max(initial=0.0)), 1e-300)

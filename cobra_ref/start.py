@@ -1,10 +1,13 @@
 """Where a run starts: the robot at rest in its reference's first shape, settled on the ground.
 
 Implements: the start at rest of assumption A25. The robot is placed in the reference's t = 0
-shape (a 3-D shape laid on its flattest side), its lowest sphere 1 mm above the ground, the box
-beside its middle (A9); then the scene settles for ``SETTLE_TIME`` with the joints holding that
-shape, under the run's own contact law and servo, so that every sphere that carries weight
-rests on the ground and the run does not begin with a fall.
+shape (a 3-D shape laid on its flattest side), its lowest sphere touching the ground, the box
+beside its middle (A9); then the scene settles with the joints holding that shape, under the run's own contact law and
+servo, for at least ``SETTLE_TIME`` and until no coordinate moves faster than ``SETTLE_SPEED``
+(at most ``SETTLE_MAX``), so that every sphere that carries weight rests on the ground and the
+run does not begin with a fall. (A planar rolling shape only sinks by the contacts' sag and
+settles within ``SETTLE_TIME``; sidewinding's 3-D shape first rolls onto a stable side, in
+about 1.5 s.)
 """
 
 from __future__ import annotations
@@ -17,27 +20,32 @@ from .quaternion import quat_exp, quat_mul
 from .robots import neutral_q
 from .step import StepSettings
 
-SETTLE_TIME = 0.3  # [s] the scene settles this long with the joints holding the start shape (A25)
+SETTLE_TIME = 0.05  # [s] the scene settles at least this long with the joints holding the start shape (A25)
+SETTLE_MAX = 3.0  # [s] and at most this long
+SETTLE_SPEED = 1e-2  # [m/s, rad/s] until no coordinate moves faster (below the impact speed of A26)
 
 
 def initial_state(model: Model, reference, settings: StepSettings = StepSettings(), box_offset=None,
-                  box_gap: float = 0.05, box_direction=None, settle: float = SETTLE_TIME):
-    """(q0, qd0): the scene placed (``placed_state``) and settled for ``settle`` seconds.
+                  box_gap: float = 0.05, box_direction=None, settle: bool = True):
+    """(q0, qd0): the scene placed (``placed_state``) and, with ``settle``, settled (module docstring).
 
     Implements: the start at rest (assumption A25): the joints hold the reference's t = 0
     shape while the robot and the box come to rest on the ground under ``settings``' contact
-    law and servo; what is left of their motion is returned as qd0 (of the order of 1e-5 m/s).
+    law and servo; what is left of their motion (below SETTLE_SPEED) is returned as qd0.
     """
     q = placed_state(model, reference, box_offset, box_gap, box_direction=box_direction)
     qd = np.zeros(model.nv)
-    if settle > 0:
+    if settle:
         from .fast.stepper import FastStepper
 
         hold = _Hold(reference(0.0)[0])
         stepper = FastStepper(model, settings)
-        for k in range(int(round(settle / settings.dt))):
+        least, most = int(round(SETTLE_TIME / settings.dt)), int(round(SETTLE_MAX / settings.dt))
+        for k in range(most):
             result = stepper.step(q, qd, k * settings.dt, hold)
             q, qd = result.q, result.qd
+            if k + 1 >= least and np.abs(qd).max() < SETTLE_SPEED:
+                break
     return q, qd
 
 
@@ -52,10 +60,10 @@ class _Hold:
         return self.q0, zero, zero
 
 
-def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05, clearance: float = 1e-3,
+def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05, clearance: float = 0.0,
                  box_direction=None) -> np.ndarray:
     """q of the robot in the reference's t = 0 shape, head at the origin facing +x, lowest sphere
-    ``clearance`` above the ground; the box flat on the ground beside the middle of the snake
+    ``clearance`` above the ground (default: touching it); the box flat on the ground beside the middle of the snake
     (assumption A9). ``initial_state`` lets this settle.
 
     Box placement: the middle of the snake is the midpoint of the two middle bodies' centres of
@@ -78,12 +86,12 @@ def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05
     q[3:7] = _rest_on_flattest_side(model, q)
     kin = forward_kinematics(model, q)
     sph = model.spheres
-    bottoms = [kin.p[b][2] + (kin.R[b] @ c)[2] - r for b, c, r in zip(sph.body, sph.center, sph.radius)]
+    bottoms = [kin.o[b][2] + (kin.R[b] @ c)[2] - r for b, c, r in zip(sph.body, sph.center, sph.radius)]
     q[2] = clearance - min(bottoms)
     if model.boxes:
         box = model.boxes[0]
         robot = [i for i in range(model.nb) if i != box.body]
-        com = np.array([kin.p[i] + kin.R[i] @ model.com[i] for i in robot])
+        com = np.array([kin.o[i] + kin.R[i] @ model.com[i] for i in robot])
         mid_bodies = robot[len(robot) // 2 - 1:len(robot) // 2 + 1]
         middle = com[mid_bodies].mean(axis=0)
         iq = model.q_idx[box.body]
@@ -116,7 +124,7 @@ def _rest_on_flattest_side(model: Model, q) -> np.ndarray:
     """
     kin = forward_kinematics(model, q)
     robot = [i for i in range(model.nb) if not any(b.body == i for b in model.boxes)]
-    com = np.array([kin.p[i] + kin.R[i] @ model.com[i] for i in robot])
+    com = np.array([kin.o[i] + kin.R[i] @ model.com[i] for i in robot])
     n = np.linalg.svd(com - com.mean(axis=0))[2][-1]
     n = n if n[2] >= 0 else -n
     axis = np.cross(n, [0.0, 0.0, 1.0])

@@ -37,3 +37,10 @@ def chain3():
 def floating_chain4():
     """Free-floating 4-link chain (free joint + Ry, Rz, Ry)."""
     return cr.chain(4, floating=True)
+
+
+# one BLAS thread: the steps work on 23 x 23 matrices, where OpenBLAS's threads only cost time
+# (and tests run two at a time on a 2-core machine); results are bit-identical
+from cobra_ref.executors import limit_blas_threads  # noqa: E402
+
+limit_blas_threads(1)

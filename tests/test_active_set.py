@@ -1,20 +1,18 @@
-"""Certified active-set solves (cobra_ref/active_set.py) against hand-solved QPs and OSQP.
+"""Certified active-set solves of box QPs (cobra_ref/fast/active_set.py) against hand-solved QPs and OSQP.
 
-The QP, in OSQP's form: min 1/2 x^T P x + q^T x  s.t.  l <= A x <= u, P positive definite.
-An answer is accepted only if it satisfies the KKT conditions at OSQP's tolerances (module
-docstring), so every test here checks one of two things: a certified answer is the
-minimiser (against a hand solution or OSQP), and a wrong guess is refused, never returned.
+The QP: min 1/2 x^T P x + q^T x  s.t.  lo <= x <= hi, P positive definite (every least-action
+iterate has this form). An answer is accepted only if it satisfies the KKT conditions at
+OSQP's tolerances, so every test here checks one of two things: a certified answer is the
+minimiser (against a hand solution or OSQP), and a wrong answer is refused, never returned.
 """
 
 import numpy as np
 import osqp
-import pytest
 from scipy import sparse
 
-from cobra_ref.fast.active_set import WorkingSet, box_certificate, box_form, certified_solve, solve_box, solve_on_working_set
-from cobra_ref.fast.contact_qp import _constraint_matrix, facet_directions
-
-EPS = 1e-7  # ContactQP's tolerance, used here for both eps_abs and eps_rel
+from cobra_ref.fast.active_set import box_certificate, held_at_bounds, solve_box
+from cobra_ref.fast.least_action import FastBoxQP
+from cobra_ref.qp import EPS, solve_box_qp
 
 
 def test_diagonal_box_qp_is_solved_by_clipping_the_unconstrained_minimiser():
@@ -72,74 +70,69 @@ def test_the_box_certificate_accepts_the_minimiser_and_refuses_each_kind_of_wron
     assert not certified([0.0, 0.0], [yes, yes], [no, no])
 
 
-def test_a_guess_that_is_not_the_minimiser_is_refused():
-    """The same 2-variable problem through the general KKT path, with wrong working sets.
+def test_only_finite_bounds_hold_a_variable():
+    """held_at_bounds: a variable at or past a finite bound is held there; a multiplier pointing at
+    an infinite bound (OSQP's tiny dual noise on p_N <= inf) holds nothing."""
+    x = np.array([0.0, 2.0, 1.0, 5.0])
+    lo, hi = np.array([0.0, -1.0, 0.0, 0.0]), np.array([np.inf, 2.0, np.inf, np.inf])
+    y = np.array([0.0, 0.0, 1e-12, 0.0])  # a positive dual on an infinite upper bound
+    at_lo, at_hi = held_at_bounds(x, lo, hi, y)
+    np.testing.assert_array_equal(at_lo, [True, False, False, False])
+    np.testing.assert_array_equal(at_hi, [False, True, False, False])
 
-    * nothing held: the KKT solve gives the unconstrained (3, -2), which violates x_1 >= 0
-      (primal infeasible): refused;
-    * x_0 held at 0 as well: x = (0, 0), and P x + q + y = 0 gives y = -q = (4, -1); a lower
-      bound needs y <= 0 in OSQP's sign convention, and y_0 = 4: refused;
-    * only x_1 held: the minimiser (2, 0): accepted, with y = (0, -3).
+
+def _random_box_qp(rng, m=4, n_dof=12, n_servo=3):
+    """A least-action-like box QP: G = J M^-1 J^T + 1e-2 diag from a random SPD M, contact bounds
+    (p_N >= 0, |p_T| <= r) and servo rows bounded both ways."""
+    A = rng.normal(size=(n_dof, n_dof))
+    M = A @ A.T + n_dof * np.eye(n_dof)
+    J = rng.normal(size=(3 * m + n_servo, n_dof))
+    G = J @ np.linalg.solve(M, J.T)
+    P = 0.5 * (G + G.T) + 1e-2 * np.diag(np.diag(G))
+    q = rng.normal(size=len(P))
+    q[0:3 * m:3] = rng.uniform(-1.0, 0.3, size=m)
+    r = rng.uniform(0.0, 0.5, size=m)
+    lo = np.concatenate([np.column_stack([np.zeros(m), -r, -r]).ravel(), -np.full(n_servo, 0.3)])
+    hi = np.concatenate([np.column_stack([np.full(m, np.inf), r, r]).ravel(), np.full(n_servo, 0.3)])
+    return P, q, lo, hi
+
+
+def test_certified_solutions_equal_osqp_on_random_least_action_qps(rng):
+    """From OSQP's loose (1e-4) iterate, the certified answer equals OSQP's tight (1e-10) solution.
+
+    Tolerance: P is strongly convex, so a point whose KKT residual is r lies within
+    r / lambda_min(P) of the minimiser; both answers satisfy r <= EPS (1 + |q|).
     """
-    P, q, A = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-4.0, 1.0]), np.eye(2)
-    l, u = np.zeros(2), np.full(2, np.inf)
-    none = WorkingSet(np.array([False, False]), np.array([False, False]))
-    both = WorkingSet(np.array([True, True]), np.array([False, False]))
-    right = WorkingSet(np.array([False, True]), np.array([False, False]))
-    assert solve_on_working_set(P, q, A, l, u, none, EPS, EPS) is None
-    assert solve_on_working_set(P, q, A, l, u, both, EPS, EPS) is None
-    x, y = solve_on_working_set(P, q, A, l, u, right, EPS, EPS)
-    np.testing.assert_allclose(x, [2.0, 0.0], atol=1e-14)
-    np.testing.assert_allclose(y, [0.0, -3.0], atol=1e-14)
-
-
-def test_the_four_facet_pyramid_is_a_box_and_the_eight_facet_one_is_not():
-    """K = 4: rows p_N, t1 . p_T, t2 . p_T, each one unit entry on its own column (a signed
-    permutation of the 3m impulses); K = 8 adds diagonal facets (two entries per row)."""
-    A4 = _constraint_matrix(3, facet_directions(4)).toarray()
-    form = box_form(A4)
-    assert form is not None
-    np.testing.assert_array_equal(np.sort(form.col), np.arange(9))
-    assert box_form(_constraint_matrix(3, facet_directions(8)).toarray()) is None
-
-
-@pytest.mark.parametrize("n_facets", [4, 8])
-def test_certified_solutions_equal_osqp_on_random_contact_qps(rng, n_facets, mu=0.5):
-    """Random least-action QPs with fixed friction bounds: the certified answer from OSQP's
-    loose (1e-4) iterate equals OSQP's tight (1e-10) solution.
-
-    Tolerance: P is strongly convex (m = 3 contacts on 12 DoF, full rank), so a point whose
-    KKT residual is r lies within r / lambda_min(P) of the minimiser; both answers satisfy
-    r <= EPS (1 + |q|) at most (the certified one by its checks).
-    """
-    D = facet_directions(n_facets)
     accepted = 0
-    for trial in range(6):
-        m, n = 3, 12
-        M = (lambda B: B @ B.T + n * np.eye(n))(rng.normal(size=(n, n)))
-        J = rng.normal(size=(3 * m, n))
-        G = J @ np.linalg.solve(M, J.T)
-        P = 0.5 * (G + G.T) + 1e-6 * np.mean(np.diag(G)) * np.eye(3 * m)
-        q = rng.normal(size=3 * m)
-        q[0::3] = rng.uniform(-1.0, 0.3, size=m)
-        A = _constraint_matrix(m, D)
-        bound = np.repeat(mu * rng.uniform(0.0, 2.0, size=m), len(D))
-        l = np.concatenate([np.zeros(m), -bound])
-        u = np.concatenate([np.full(m, np.inf), bound])
+    for trial in range(8):
+        P, q, lo, hi = _random_box_qp(rng)
         solutions = []
         for eps in (1e-4, 1e-10):
             solver = osqp.OSQP()
-            solver.setup(P=sparse.triu(sparse.csc_matrix(P), format="csc"), q=q, A=A, l=l, u=u,
-                         eps_abs=eps, eps_rel=eps, polishing=False, verbose=False, max_iter=100000)
+            solver.setup(P=sparse.triu(sparse.csc_matrix(P), format="csc"), q=q, A=sparse.identity(len(q), format="csc"),
+                         l=lo, u=hi, eps_abs=eps, eps_rel=eps, polishing=False, verbose=False, max_iter=100000)
             solutions.append(solver.solve(raise_error=False))
         loose, tight = solutions
         assert tight.info.status == "solved"
-        answer = certified_solve(P, q, A.toarray(), l, u, loose.x, loose.y, EPS, EPS, box_form(A.toarray()))
+        answer = solve_box(P, q, lo, hi, loose.x, EPS, EPS, guess=held_at_bounds(loose.x, lo, hi, loose.y))
         if answer is None:
             continue
         accepted += 1
         lam_min = np.linalg.eigvalsh(P)[0]
         np.testing.assert_allclose(answer[0], tight.x, atol=2 * EPS * (1 + np.abs(q).max()) / lam_min)
-        # the duals too (the rows of A are independent, so they are unique): OSQP's sign convention
-        np.testing.assert_allclose(answer[1], tight.y, atol=1e-5 * np.abs(tight.y).max())
-    assert accepted >= 4, f"only {accepted} of 6 loose iterates led to a certified answer"
+    assert accepted >= 6, f"only {accepted} of 8 loose iterates led to a certified answer"
+
+
+def test_the_fast_box_qp_equals_a_fresh_osqp_solve(rng):
+    """FastBoxQP (loose OSQP + certificate on a step's first QP, a certificate from the start on
+    later ones, tight OSQP otherwise) returns the minimiser that cobra_ref.qp.solve_box_qp does."""
+    fast = FastBoxQP()
+    for trial in range(8):
+        P, q, lo, hi = _random_box_qp(rng)
+        if trial % 2 == 0:
+            fast.new_step()
+        reference = solve_box_qp(P, q, lo, hi)
+        answer = fast(P, q, lo, hi, np.zeros(len(q)))
+        lam_min = np.linalg.eigvalsh(P)[0]
+        np.testing.assert_allclose(answer.x, reference.x, atol=4 * EPS * (1 + np.abs(q).max()) / lam_min)
+        assert answer.solves >= (1 if trial % 2 == 0 else 0)

@@ -59,7 +59,7 @@ def test_ground_reactions_carry_the_weight(pushing_run):
 
     def com_z(q):
         kin = forward_kinematics(model, q)
-        return sum(model.mass[i] * (kin.p[i] + kin.R[i] @ model.com[i])[2] for i in range(nb)) / total_mass
+        return sum(model.mass[i] * (kin.o[i] + kin.R[i] @ model.com[i])[2] for i in range(nb)) / total_mass
 
     vz_end = (com_z(traj.q[-1]) - com_z(traj.q[-2])) / traj.dt
     expected = total_mass * 9.81 * traj.duration + total_mass * vz_end

@@ -1,14 +1,17 @@
 """Contact candidates and the stacked relative Jacobian J_c ([COBRA] eq. (3)-(4)).
 
-The simulator uses batched forms of the gap functions; these tests check them equal, contact by
-contact, to the readable one-contact functions of cobra_ref/gaps.py, and check J_c against
-finite differences of those gaps: W_i^T = dg_i/dq along every velocity direction.
+The reference (cobra_ref/contact.py) calls the one-contact gap functions of cobra_ref/gaps.py;
+the fast wing (cobra_ref/fast/contacts.py) computes the same arrays in batches. These tests
+check the two equal, contact by contact, and check J_c against finite differences of the gaps:
+W_i^T = dg_i/dq along every velocity direction.
 """
 
 import numpy as np
 import pytest
 
-from cobra_ref.fast.contacts import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND, contact_jacobian, find_contacts
+from cobra_ref import contact as reference
+from cobra_ref.contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND
+from cobra_ref.fast import contacts as fast
 from cobra_ref.fast.chain import ChainModel
 from cobra_ref.gaps import (
     box_corner_plane_gaps,
@@ -22,7 +25,7 @@ from cobra_ref.kinematics import integrate
 from cobra_ref.quaternion import quat_to_rot
 from cobra_ref.gaits import RollingGait
 from cobra_ref.robots import cobra_model
-from cobra_ref.simulate import initial_state
+from cobra_ref.start import placed_state
 
 
 def _rotation(rng):
@@ -66,12 +69,12 @@ def scene(rng):
     """COBRA in its rolling start shape on the ground, the box 4 mm from a link sphere and turned,
     every joint nudged: contacts of all three kinds within a 1 cm margin."""
     model = cobra_model()
-    q, qd = initial_state(model, RollingGait(), box_offset=(0.12, 0.0))
+    q, qd = placed_state(model, RollingGait(), box_offset=(0.12, 0.0)), np.zeros(model.nv)
     q[7:18] += rng.normal(scale=0.02, size=11)
     chain = ChainModel(model)
     terms = chain.terms(q, qd)
     sph = model.spheres
-    centers = terms.p[sph.body] + np.einsum("sij,sj->si", terms.R[sph.body], sph.center)
+    centers = terms.o[sph.body] + np.einsum("sij,sj->si", terms.R[sph.body], sph.center)
     # put the box 4 mm beyond the sphere of L5 (body 5), along +x, at ground level, turned 0.2 rad
     s5 = int(np.flatnonzero(sph.body == 5)[0])
     iq = model.q_idx[model.boxes[0].body]
@@ -87,8 +90,8 @@ def _reference_gaps(model, chain, q):
     """Every sphere-ground, sphere-box and corner-ground gap by the one-contact functions, by key."""
     terms = chain.terms(q, np.zeros(model.nv))
     sph, box = model.spheres, model.boxes[0]
-    centers = terms.p[sph.body] + np.einsum("sij,sj->si", terms.R[sph.body], sph.center)
-    R_b, p_b = terms.R[box.body], terms.p[box.body]
+    centers = terms.o[sph.body] + np.einsum("sij,sj->si", terms.R[sph.body], sph.center)
+    R_b, p_b = terms.R[box.body], terms.o[box.body]
     out = {}
     for s in range(len(sph.radius)):
         out[(ROBOT_GROUND, int(sph.body[s]), s)] = sphere_plane_gap(centers[s], sph.radius[s])
@@ -99,8 +102,13 @@ def _reference_gaps(model, chain, q):
 
 
 def test_find_contacts_equals_the_one_contact_gap_functions(scene):
+    """The reference and the batched search find the same contacts, in the same order, with the
+    gaps, frames and witness points of the one-contact functions."""
     model, chain, q, qd = scene
-    contacts = find_contacts(model, chain.terms(q, qd), margin=0.01)
+    contacts = reference.find_contacts(model, q, margin=0.01)
+    batched = fast.find_contacts(model, chain.terms(q, qd), margin=0.01)
+    for a, b in zip(contacts, batched):
+        np.testing.assert_allclose(a, b, atol=1e-14)
     assert set(contacts.kind.tolist()) == {ROBOT_GROUND, ROBOT_BOX, BOX_GROUND}
     ref = _reference_gaps(model, chain, q)
     for i, key in enumerate(contacts.keys()):
@@ -116,8 +124,8 @@ def test_normal_rows_of_J_c_are_the_gap_gradients_by_central_differences(scene):
     """W_i^T e_k = (g_i(q (+) h e_k) - g_i(q (-) h e_k)) / 2h for every velocity direction k,
     including the box's: the robot-box rows are relative (eq. (3): the gap moves with the box)."""
     model, chain, q, qd = scene
-    contacts = find_contacts(model, chain.terms(q, qd), margin=0.01)
-    J = contact_jacobian(chain, chain.terms(q, qd), contacts)
+    contacts = reference.find_contacts(model, q, margin=0.01)
+    J = reference.contact_jacobian(model, q, contacts)
     h = 1e-6
     W_fd = np.zeros((contacts.m, model.nv))
     for k in range(model.nv):
@@ -133,15 +141,11 @@ def test_normal_rows_of_J_c_are_the_gap_gradients_by_central_differences(scene):
     assert len(rb) and np.all(np.abs(J[3 * rb][:, box_cols]).max(axis=1) > 0.1)
 
 
-def test_J_c_equals_the_one_point_jacobian_loop(scene):
-    """The batched J_c equals [n t1 t2]^T (J_A - J_B) built contact by contact from
-    ChainModel.point_jacobian (itself tested equal to kinematics.point_jacobian)."""
+def test_the_batched_J_c_equals_the_reference(scene):
+    """The fast wing's J_c (S_lin - [x]x S_ang over the dofs that move each body, all contacts at
+    once) equals the reference's [n t1 t2]^T (J_A - J_B) built from kinematics.point_jacobian."""
     model, chain, q, qd = scene
     terms = chain.terms(q, qd)
-    contacts = find_contacts(model, terms, margin=0.01)
-    J = contact_jacobian(chain, terms, contacts)
-    for i in range(contacts.m):
-        J_rel = chain.point_jacobian(terms, contacts.body_A[i], contacts.point_A[i])
-        if contacts.body_B[i] >= 0:
-            J_rel = J_rel - chain.point_jacobian(terms, contacts.body_B[i], contacts.point_B[i])
-        np.testing.assert_allclose(J[3 * i:3 * i + 3], contacts.frame[i].T @ J_rel, atol=1e-13)
+    contacts = fast.find_contacts(model, terms, margin=0.01)
+    np.testing.assert_allclose(fast.contact_jacobian(chain, terms, contacts),
+                               reference.contact_jacobian(model, q, contacts), atol=1e-13)

@@ -81,7 +81,7 @@ def _finite_difference_velocity(model, q, qd, body, point, eps=1e-6):
     """World velocity of a body point by central differences of forward kinematics along qd."""
     def world_point(qq):
         kin = forward_kinematics(model, qq)
-        return kin.p[body] + kin.R[body] @ point
+        return kin.o[body] + kin.R[body] @ point
     return (world_point(cr.integrate(model, q, qd, eps)) - world_point(cr.integrate(model, q, qd, -eps))) / (2 * eps)
 
 

@@ -23,7 +23,7 @@ def test_fast_mass_matrix_bias_and_poses_equal_the_reference(cobra, fast, rng):
         h = cr.bias_force(cobra, q, qd)
         np.testing.assert_allclose(terms.h, h, atol=1e-12 * max(1.0, np.abs(h).max()))
         np.testing.assert_allclose(terms.R, np.array(kin.R), atol=1e-14)
-        np.testing.assert_allclose(terms.p, np.array(kin.p), atol=1e-14)
+        np.testing.assert_allclose(terms.o, np.array(kin.o), atol=1e-14)
 
 
 def test_fast_point_jacobian_equals_the_reference(cobra, fast, rng):
@@ -32,7 +32,7 @@ def test_fast_point_jacobian_equals_the_reference(cobra, fast, rng):
     kin = cr.forward_kinematics(cobra, q)
     for body in range(cobra.nb):
         point = rng.normal(size=3) * 0.05
-        x = kin.p[body] + kin.R[body] @ point
+        x = kin.o[body] + kin.R[body] @ point
         np.testing.assert_allclose(fast.point_jacobian(terms, body, x), cr.point_jacobian(cobra, q, body, point),
                                    atol=1e-13, err_msg=f"body {body}")
 

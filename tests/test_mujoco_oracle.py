@@ -69,7 +69,7 @@ def test_forward_kinematics_matches_mujoco_body_poses(cobra, mj):
         d = _set(mj, q, qd)
         kin = cr.forward_kinematics(cobra, q)
         for i in range(cobra.nb):
-            np.testing.assert_allclose(kin.p[i], d.xpos[i + 1], atol=1e-12)
+            np.testing.assert_allclose(kin.o[i], d.xpos[i + 1], atol=1e-12)
             np.testing.assert_allclose(kin.R[i], d.xmat[i + 1].reshape(3, 3), atol=1e-12)
 
 
@@ -83,7 +83,7 @@ def test_point_and_body_jacobians_match_mj_jac(cobra, mj):
         for b in range(cobra.nb):
             point = rng.normal(size=3) * 0.05
             jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
-            mujoco.mj_jac(m, d, jacp, jacr, kin.p[b] + kin.R[b] @ point, b + 1)
+            mujoco.mj_jac(m, d, jacp, jacr, kin.o[b] + kin.R[b] @ point, b + 1)
             scale = max(1.0, np.abs(jacp).max())
             assert np.abs(cr.point_jacobian(cobra, q, b, point, kin) - jacp).max() <= 1e-9 * scale
             assert np.abs(kin.R[b] @ cr.body_jacobian(cobra, q, b, kin)[:3] - jacr).max() <= 1e-9
@@ -114,12 +114,12 @@ def test_exported_joint_ranges_and_actuator_force_limits(cobra, mj):
 
 def test_exported_contact_pairs_have_the_same_friction_as_the_contact_solve(cobra, mj):
     """MuJoCo combines two geoms' friction by their max: ground mu = 1, robot and box geoms
-    mu_robot_box = 0.5 -> robot-ground and box-ground 1.0, robot-box 0.5 (assumption C22)."""
+    mu_robot_box = 0.5 -> robot-ground and box-ground 1.0, robot-box 0.5 (assumption A22)."""
     from cobra_ref.gaits import RollingGait
-    from cobra_ref.simulate import initial_state
+    from cobra_ref.start import placed_state
 
     m, d = mj
-    q, _ = initial_state(cobra, RollingGait(), box_gap=-0.03)  # box 30 mm into the middle links
+    q = placed_state(cobra, RollingGait(), box_gap=-0.03)  # box 30 mm into the middle links
     q[2] -= 0.0015  # robot spheres 0.5 mm into the ground
     d.qpos[:] = q
     d.qvel[:] = 0

@@ -14,7 +14,8 @@ import pytest
 import cobra_ref as cr
 from cobra_ref.reproduce import mujoco_check as mr
 from cobra_ref.gaits import gait
-from cobra_ref.simulate import initial_state, simulate
+from cobra_ref.simulate import simulate
+from cobra_ref.start import placed_state
 
 mujoco = pytest.importorskip("mujoco")
 
@@ -31,7 +32,7 @@ def test_box_resting_beside_a_still_robot_stays_put_in_mujoco(cobra, mode):
     load, so it must not slide; MuJoCo's soft contact lets it sink by a_u (1 - d) tau_c^2 ~ 1e-5 m
     ([MJ] "Reference": r = a_u (1 - d) timeconst^2 dampratio^2, a_u = g, d >= 0.9, tau_c = 4 ms)."""
     reference = gait("C")
-    q0, _ = initial_state(cobra, reference)
+    q0 = placed_state(cobra, reference)
     res = mr.rollout(cobra, _hold(reference(0.0)[0]), q0, 1.0, mode=mode)
     box = cobra.boxes[0]
     np.testing.assert_array_equal(res.qpos[0], q0, err_msg="the initial state goes into MuJoCo unchanged")
@@ -49,7 +50,7 @@ def test_kinematic_mode_joint_angles_equal_the_reference(cobra, name):
     included (measured ~1.3e-5). Without its velocity shift it would lag by 2 tau_c theta_dot_ref
     ~ 6e-3 rad (module docstring), so this tolerance tests the shift too."""
     reference = gait(name)
-    q0, _ = initial_state(cobra, reference)
+    q0 = placed_state(cobra, reference)
     res = mr.rollout(cobra, reference, q0, 1.5, mode="kinematic")
     hinges = [cobra.q_idx[i].start for i, jt in enumerate(cobra.joint_type) if jt != "free"]
     q_ref = np.array([reference(t)[0] for t in res.t])
@@ -68,7 +69,7 @@ def test_j_mirror_pushes_the_box_along_the_mirror_image_of_j(cobra):
     paths = {}
     for name in ("J", "J-mirror"):
         reference = gait(name)
-        q0, _ = initial_state(cobra, reference)
+        q0 = placed_state(cobra, reference)
         paths[name] = mr.rollout(cobra, reference, q0, 2.0).box_pose[:, :2]
     assert np.linalg.norm(paths["J"][-1] - paths["J"][0]) > mr.MIN_DISPLACEMENT, "J does not push the box"
     np.testing.assert_allclose(paths["J-mirror"], paths["J"] * [1.0, -1.0], atol=1e-6, rtol=0,
@@ -94,7 +95,7 @@ def c_roll_2s():
     """Our simulator and MuJoCo (kinematic servo), the same 2 s of C rolling from the same state."""
     model = cr.cobra_model()
     reference = gait("C")
-    q0, _ = initial_state(model, reference)
+    q0 = placed_state(model, reference)
     ours = simulate(model, reference, 2.0, q0=q0)
     return ours, mr.rollout(model, reference, q0, 2.0, mode="kinematic")
 

@@ -52,6 +52,6 @@ def test_straight_snake_spans_the_total_length(cobra):
     """From the head's front face to the tail's back face along x: 1.695 m - nothing lost."""
     kin = cr.forward_kinematics(cobra, cr.neutral_q(cobra))
     p = CobraParameters()
-    front = kin.p[0][0] + p.length_head / 2
-    tail_back = kin.p[11][0] + cobra.com[11][0] - p.length_tail / 2
+    front = kin.o[0][0] + p.length_head / 2
+    tail_back = kin.o[11][0] + cobra.com[11][0] - p.length_tail / 2
     np.testing.assert_allclose(front - tail_back, p.total_length, atol=1e-12)

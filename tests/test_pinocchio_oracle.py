@@ -182,7 +182,7 @@ def test_body_poses_match_pinocchio_forward_kinematics_at_random_states(pin_robo
             oMi = data.oMi[i + 1]
             np.testing.assert_allclose(oMi.rotation, kin.R[i], atol=1e-12,
                                        err_msg=f"R of body {model.body_names[i]} at state {k}")
-            np.testing.assert_allclose(oMi.translation, kin.p[i], atol=1e-12,
+            np.testing.assert_allclose(oMi.translation, kin.o[i], atol=1e-12,
                                        err_msg=f"p of body {model.body_names[i]} at state {k}")
 
 

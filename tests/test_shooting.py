@@ -1,4 +1,4 @@
-"""Single shooting (cobra_ref.shooting, cobra-ref optimize): worked examples on a tiny problem.
+"""Single shooting (cobra_ref.planning, cobra-ref optimize): worked examples on a tiny problem.
 
 The tiny problem: the C gait over 0.3 s (ramp 0.1 s), the box 5 mm from the middle link (instead
 of 5 cm, so that a short rollout already pushes it), one decision parameter (the frequency in
@@ -170,7 +170,8 @@ def test_replaying_the_json_reproduces_the_recorded_cost_exactly(params_file, tm
     traj, cost = sh.replay(str(params_file))
     assert cost["cost"] == record["cost"]
     assert cost["box_distance_to_goal"] == record["box_distance_to_goal"]
-    args = argparse.Namespace(params=str(params_file), duration=None, out=str(tmp_path / "r.npz"), quiet=True)
+    args = argparse.Namespace(params=str(params_file), duration=None, out=str(tmp_path / "r.npz"), quiet=True,
+                              stepper="fast")
     assert cmd_simulate_params(args) == 0
     line = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert line["cost_matches"] is True and line["params_cost"] == record["cost"]
@@ -317,20 +318,18 @@ def test_optimization_figure_replays_each_optimum_once(params_file, tmp_path, mo
     regenerate._optimization_figures(str(directory), ["C"], str(out), str(cache), False)
 
 
-def test_with_the_pd_servo_the_optimum_respects_the_torque_and_joint_limits_at_every_step():
-    """Eq. (6) constraints (2) and (3) held exactly: with ``servo="pd"`` the torques are saturated at
-    tau_max, so no step of any rollout exceeds it (tau_excess <= 0), and the joints stay inside
-    q_max; the optimizer still lowers the cost. (With the default prescribed servo an impact step
-    exceeds tau_max; see the test above, which checks that the penalty counts exactly those.)"""
-    problem = tiny_problem(servo="pd")
-    assert problem.settings().servo == "pd"
-    result = sh.optimize(problem, maxiter=1, step=0.5, executor=sh.SerialExecutor())
-    assert result.best["cost"] <= result.history[0]["cost"]
-    traj = sh.rollout(problem, [result.best["params"]["frequency"]])
+def test_with_the_position_servo_the_optimum_respects_the_torque_and_joint_limits_at_every_step(problem, serial_result):
+    """Eq. (6) constraints (2) and (3) held exactly: the default position servo's impulse is
+    bounded by tau_max dt in the least-action QP, so no step of any rollout exceeds tau_max
+    (tau_excess <= 0), and the joints stay inside q_max; the servo and the contact law are kept
+    in the params JSON, and an unknown servo is refused."""
+    assert problem.settings().servo == "position" and problem.settings().contact == "compliant"
+    traj = sh.rollout(problem, [serial_result.best["params"]["frequency"]])
     assert np.all(traj.steps["tau_excess"] <= 1e-12), traj.steps["tau_excess"].max()
     assert np.all(traj.steps["q_excess"] <= 0.0), traj.steps["q_excess"].max()
-    assert result.best["terms"]["tau_limit"] == 0.0 and result.best["terms"]["q_limit"] == 0.0
-    assert sh.problem_from_dict(sh.problem_to_dict(problem)).servo == "pd"
+    assert serial_result.best["terms"]["tau_limit"] == 0.0 and serial_result.best["terms"]["q_limit"] == 0.0
+    again = sh.problem_from_dict(sh.problem_to_dict(problem))
+    assert (again.servo, again.contact) == ("position", "compliant")
     with pytest.raises(sh.ShootingError, match="servo must be"):
         tiny_problem(servo="stiff")
 

@@ -17,12 +17,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import cobra_ref as cr
-from cobra_ref.fast.contacts import KINDS, ROBOT_BOX, contact_jacobian, find_contacts
-from cobra_ref.fast.chain import ChainModel
-from cobra_ref.gaps import box_corner_plane_gaps, box_corners, sphere_box_gap, sphere_plane_gap
-from cobra_ref.quaternion import rot_to_quat
+from cobra_ref.contact import KINDS, ROBOT_BOX, contact_jacobian, find_contacts
 from cobra_ref.gaits import RollingGait
-from cobra_ref.simulate import initial_state
+from cobra_ref.gaps import box_corner_plane_gaps, box_corners, sphere_box_gap, sphere_plane_gap
+from cobra_ref.kinematics import forward_kinematics
+from cobra_ref.quaternion import rot_to_quat
+from cobra_ref.start import placed_state
 
 np.set_printoptions(precision=4, suppress=True)
 rng = np.random.default_rng(0)
@@ -231,23 +231,25 @@ fig.tight_layout()
 #     q  (25) = [head x y z qw qx qy qz | theta_0 .. theta_10 | box x y z qw qx qy qz]
 #     qd (23) = [head v_world, w_body   | thetad_0 .. thetad_10 | box v_world, w_body]
 #
-# We take the t = 0 shape of the rolling gait from `initial_state` (a flat C-shaped snake whose
-# lowest sphere, the tail's, is 1 mm above the ground), turn the yaw joints by a few random
+# We take the t = 0 shape of the rolling gait from `placed_state` (a flat C-shaped snake whose
+# lowest sphere, the tail's, is 1 mm above the ground; `initial_state` would then let it settle
+# onto the ground, which we do not need here), turn the yaw joints by a few random
 # hundredths of a radian so that nothing is symmetric, and place the box ourselves (so that we
 # know the gap to expect): resting on the ground just outside the curve, 4 mm from the sphere
 # of link L6 and turned 0.2 rad from facing it squarely.
 #
 # `find_contacts` lists the candidate contacts with gap below a margin: spheres on the ground
-# (kind 0), spheres on the box (kind 1) and box corners on the ground (kind 2). It reads the
-# body poses from `ChainModel(model).terms(q, qd)`, the world-frame kinematics of `fastdyn`.
+# (kind 0), spheres on the box (kind 1) and box corners on the ground (kind 2), one gap
+# function call per pair. `find_contacts(model, q, margin)` and `contact_jacobian(model, q,
+# contacts)` (module `cobra_ref.contact`, the readable reference) compute the body poses with
+# `forward_kinematics(model, q)` (lists `kin.o[i]`, `kin.R[i]` per body), which we use too.
 
 # %%
 cobra = cr.cobra_model()
-chain = ChainModel(cobra)
 box = cobra.boxes[0]
 i_L6 = cobra.body_names.index("L6")
 s_L6 = int(np.flatnonzero(cobra.spheres.body == i_L6)[0])
-q, qd = initial_state(cobra, RollingGait())
+q = placed_state(cobra, RollingGait())
 yaw_q = [cobra.q_idx[i].start for i, jt in enumerate(cobra.joint_type) if jt == "Rz"]
 q[yaw_q] += 0.03 * rng.normal(size=len(yaw_q))
 
@@ -255,10 +257,10 @@ q[yaw_q] += 0.03 * rng.normal(size=len(yaw_q))
 # u_out turned by alpha = 0.2 rad, so its -x face faces the sphere at an angle. The centre
 # goes along u_out at distance d; the sphere centre is then d cos(alpha) - h_x from the face
 # plane, and 4 mm of gap needs d cos(alpha) - h_x - r = 0.004.
-terms = chain.terms(q, qd)
-c_L6 = terms.p[i_L6] + terms.R[i_L6] @ cobra.spheres.center[s_L6]
+kin = forward_kinematics(cobra, q)
+c_L6 = kin.o[i_L6] + kin.R[i_L6] @ cobra.spheres.center[s_L6]
 r_L6 = cobra.spheres.radius[s_L6]
-u_out = terms.R[i_L6] @ e_y
+u_out = kin.R[i_L6] @ e_y
 alpha = 0.2
 R_box = R_z(np.arctan2(u_out[1], u_out[0]) + alpha)
 d = (r_L6 + box.half[0] + 0.004) / np.cos(alpha)
@@ -267,8 +269,8 @@ p_box[2] = box.half[2]                            # resting on the ground
 iq_box = cobra.q_idx[box.body]
 q[iq_box] = np.concatenate([p_box, rot_to_quat(R_box)])
 
-terms = chain.terms(q, qd)
-contacts = find_contacts(cobra, terms, margin=0.01)
+kin = forward_kinematics(cobra, q)
+contacts = find_contacts(cobra, q, margin=0.01)
 print(f"{contacts.m} contacts with g < 1 cm:")
 for k, (kind, body_A, feature) in enumerate(contacts.keys()):
     print(f"  {k:2d}  {KINDS[kind]:12s}  A = {cobra.body_names[body_A]:4s}  feature {feature:2d}  "
@@ -306,11 +308,11 @@ for k, (kind, body_A, feature) in enumerate(contacts.keys()):
 # %%
 def gaps_by_key(q_new):
     """Every candidate gap at q_new (margin = inf), as a dict {contact key: g}."""
-    all_contacts = find_contacts(cobra, chain.terms(q_new, np.zeros(cobra.nv)), margin=np.inf)
+    all_contacts = find_contacts(cobra, q_new, margin=np.inf)
     return dict(zip(all_contacts.keys(), all_contacts.g))
 
 
-J_c = contact_jacobian(chain, terms, contacts)
+J_c = contact_jacobian(cobra, q, contacts)
 W_T = J_c[0::3]                                   # normal rows: one W_i^T per contact, (m, nv)
 keys = contacts.keys()
 eps = 1e-6
@@ -385,13 +387,13 @@ print("max |robot columns| of box-ground rows :", np.abs(W_T[kinds == 2][:, :iv_
 # %%
 def frozen_separations(q_new):
     """C^T (x_A - x_B) at q_new for the material points that were at point_A, point_B at q, (m, 3)."""
-    t_new = chain.terms(q_new, np.zeros(cobra.nv))
+    kin_new = forward_kinematics(cobra, q_new)
 
     def moved(body, x):
         """World position at q_new of the point of ``body`` that was at x at q (the ground: x)."""
         if body < 0:
             return x
-        return t_new.p[body] + t_new.R[body] @ (terms.R[body].T @ (x - terms.p[body]))
+        return kin_new.o[body] + kin_new.R[body] @ (kin.R[body].T @ (x - kin.o[body]))
 
     out = np.zeros((contacts.m, 3))
     for i in range(contacts.m):

@@ -187,7 +187,7 @@ for f, e in entries.items():
 # %%
 fig, axes = plt.subplots(1, 2, figsize=(10, 4))
 for (A, q0), style in zip(starts.items(), ("C0", "C1")):
-    pts = np.array([forward_kinematics(model, q0).p[i][:2] for i in range(model.nb - 1)])
+    pts = np.array([forward_kinematics(model, q0).o[i][:2] for i in range(model.nb - 1)])
     axes[0].plot(*pts.T, "o-", color=style, label=f"start shape, A = {A} rad")
 half = 0.05
 bx, by = problem.box_pose0[:2]

@@ -9,9 +9,9 @@ from __future__ import annotations
 import argparse
 
 from ..executors import limit_blas_threads
-from . import bench, figures, info, optimize, simulate
+from . import bench, figures, info, optimize, simulate, view
 
-SUBCOMMANDS = (info, simulate, optimize, figures, bench)
+SUBCOMMANDS = (info, simulate, optimize, figures, bench, view)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -24,6 +24,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Reference implementation of COBRA's non-impulsive contact-implicit "
                     "loco-manipulation (arXiv 2404.08714).",
     )
+    from .. import __version__
+
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in SUBCOMMANDS:
         module.add_parsers(sub)

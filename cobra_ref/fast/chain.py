@@ -14,8 +14,8 @@ the RNEA recursions are cumulative sums when everything is written in world coor
     tau_k = S_k^T F_body(k),   M[k, l] = S_k^T Ic_body(l) S_l for k <= l in one chain
 
 with S_k the world-coordinate motion subspace: a revolute joint about unit axis z through
-point p has S = [z; p x z]; the free joint (qd = [v_world; w_body]) has
-S = [[0, R], [1, p x R]] and c = [0; -w_world x v_world].
+point o has S = [z; o x z]; the free joint (qd = [v_world; w_body]) has
+S = [[0, R], [1, o x R]] and c = [0; -w_world x v_world].
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ class ChainTerms(NamedTuple):
     """World-frame dynamics terms of one configuration and velocity."""
 
     R: np.ndarray  # (nb, 3, 3) body orientations
-    p: np.ndarray  # (nb, 3) body origins
+    o: np.ndarray  # (nb, 3) body origins
     S: np.ndarray  # (6, nv) world motion subspace columns
     V: np.ndarray  # (nb, 6) body spatial velocities, world coordinates at the world origin
     M: np.ndarray  # (nv, nv) joint-space inertia
@@ -78,7 +78,7 @@ class ChainModel:
         rev_axis = np.array([_AXIS[model.joint_type[i]] for i in self.rev_body], dtype=int)
         self.rev_axis = rev_axis
         self.rev_j, self.rev_k = (rev_axis + 1) % 3, (rev_axis + 2) % 3
-        # free joints: (body, first q index, first dof); their S columns [0, R; 1, p x R] keep
+        # free joints: (body, first q index, first dof); their S columns [0, R; 1, o x R] keep
         # the identity block in a template
         self.free = [(i, model.q_idx[i].start, model.v_idx[i].start)
                      for i, jt in enumerate(model.joint_type) if jt == "free"]
@@ -92,9 +92,9 @@ class ChainModel:
         self.tree_rot_cols = (self.tree_rot[self.rev_body, :, self.rev_j], self.tree_rot[self.rev_body, :, self.rev_k])
 
     def terms(self, q, qd) -> ChainTerms:
-        """R, p, S, V, M and h at (q, qd): the same numbers as forward_kinematics, crba, bias_force."""
-        R, p = self._poses(q)
-        S, c_free = self._motion_subspace(R, p, qd)
+        """R, o, S, V, M and h at (q, qd): the same numbers as forward_kinematics, crba, bias_force."""
+        R, o = self._poses(q)
+        S, c_free = self._motion_subspace(R, o, qd)
         # V_i = cumulative sum of S_k qd_k within each chain, read at each body's last dof
         Sqd = (S * qd).T
         V = self._chain_cumsum(Sqd)[self.last_dof]
@@ -102,7 +102,7 @@ class ChainModel:
         c = _motion_cross(V[self.dof_body], Sqd)
         c[self.free_dofs] = c_free
         A = self.a_0 + self._chain_cumsum(c)[self.last_dof]
-        com = p + np.einsum("bij,bj->bi", R, self.com)
+        com = o + np.einsum("bij,bj->bi", R, self.com)
         I_w = self._world_inertias(R, com)
         f = np.einsum("bij,bj->bi", I_w, A) + _force_cross(V, np.einsum("bij,bj->bi", I_w, V))
         F = self._subtree_sum(f)
@@ -113,7 +113,7 @@ class ChainModel:
         M = np.where(self.upper_same_chain, S.T @ IcS, 0.0)
         M = M + M.T
         M.flat[::len(M) + 1] *= 0.5
-        return ChainTerms(R, p, S, V, M, h, com)
+        return ChainTerms(R, o, S, V, M, h, com)
 
     def _poses(self, q):
         """Body orientations and origins; joint rotations batched, the chain product in a loop."""
@@ -135,28 +135,28 @@ class ChainModel:
                 R[i] = R[i - 1] @ R_rel[n]
                 n += 1
         R = np.array(R)
-        # p_i = p_parent + R_parent tree_pos_i: a cumulative sum along each chain from its root
+        # o_i = o_parent + R_parent tree_pos_i: a cumulative sum along each chain from its root
         # (free joint) position; the free joints' rows of tree_pos are replaced by those positions
         steps = np.einsum("bij,bj->bi", R[self.rev_body - 1], self.tree_pos[self.rev_body])
         d = np.empty((model.nb, 3))
         d[self.rev_body] = steps
         for i, start, _ in self.free:
             d[i] = q[start:start + 3]
-        p = np.cumsum(d, axis=0)
+        o = np.cumsum(d, axis=0)
         for i in self.chain_starts:
-            p[i:] -= p[i - 1]
-        return R, p
+            o[i:] -= o[i - 1]
+        return R, o
 
-    def _motion_subspace(self, R, p, qd):
+    def _motion_subspace(self, R, o, qd):
         """World motion subspace S (6, nv) and the free joints' velocity-product terms (6k, 6)."""
         S = self.S_template.copy()
         axes = R[self.rev_body, :, self.rev_axis]
         S[:3, self.rev_v] = axes.T
-        S[3:, self.rev_v] = cross_rows(p[self.rev_body], axes).T
+        S[3:, self.rev_v] = cross_rows(o[self.rev_body], axes).T
         c = np.zeros((6 * len(self.free), 6))
         for n, (i, _, v) in enumerate(self.free):
             S[:3, v + 3:v + 6] = R[i]
-            S[3:, v + 3:v + 6] = skew(p[i]) @ R[i]
+            S[3:, v + 3:v + 6] = skew(o[i]) @ R[i]
             # the free joint's velocity-product term in world coordinates: [0; -w_world x v_world]
             w, u = R[i] @ qd[v + 3:v + 6], qd[v:v + 3]
             c[6 * n + 5, 3:] = (w[2] * u[1] - w[1] * u[2], w[0] * u[2] - w[2] * u[0], w[1] * u[0] - w[0] * u[1])

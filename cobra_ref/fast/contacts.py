@@ -23,7 +23,7 @@ def find_contacts(model, terms: ChainTerms, margin: float) -> Contacts:
     :mod:`cobra_ref.gaps` row by row).
     """
     sph = model.spheres
-    centers = terms.p[sph.body] + np.einsum("sij,sj->si", terms.R[sph.body], sph.center)
+    centers = terms.o[sph.body] + np.einsum("sij,sj->si", terms.R[sph.body], sph.center)
     # robot spheres on the ground: g = c_z - r, n = e_z (gaps.sphere_plane_gap)
     s = np.flatnonzero(centers[:, 2] - sph.radius < margin)
     counts = [len(s)]
@@ -32,7 +32,7 @@ def find_contacts(model, terms: ChainTerms, margin: float) -> Contacts:
     point_A, point_B = [centers[s] - sph.radius[s, None] * gapfn.e_z], [centers[s] * [1.0, 1.0, 0.0]]
     box_bodies = []
     for box in model.boxes:
-        R_b, p_b = terms.R[box.body], terms.p[box.body]
+        R_b, p_b = terms.R[box.body], terms.o[box.body]
         # robot spheres on the box (gaps.sphere_box_gap), after a cheap test: the distance to
         # the box is at least the largest excess of the centre over a half extent
         c_b = (centers - p_b) @ R_b

@@ -293,7 +293,7 @@ def middle_pose(model, q) -> np.ndarray:
     kin = forward_kinematics(model, q)
     robot = [i for i in range(model.nb) if all(b.body != i for b in model.boxes)]
     a, b = robot[len(robot) // 2 - 1], robot[len(robot) // 2]
-    com_a, com_b = (kin.p[i] + kin.R[i] @ model.com[i] for i in (a, b))
+    com_a, com_b = (kin.o[i] + kin.R[i] @ model.com[i] for i in (a, b))
     d = com_a - com_b
     return np.array([*(0.5 * (com_a + com_b))[:2], np.arctan2(d[1], d[0])])
 

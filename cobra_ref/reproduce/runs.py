@@ -111,7 +111,7 @@ def travel_direction(spec: RunSpec, periods: float = 2.0) -> np.ndarray:
 
     def com(q):
         kin = forward_kinematics(model, q)
-        pts = np.array([kin.p[i] + kin.R[i] @ model.com[i] for i in robot])
+        pts = np.array([kin.o[i] + kin.R[i] @ model.com[i] for i in robot])
         return np.average(pts, axis=0, weights=[model.mass[i] for i in robot])[:2]
 
     d = com(traj.q[-1]) - com(traj.q[0])

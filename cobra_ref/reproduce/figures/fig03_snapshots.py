@@ -110,7 +110,7 @@ def scene_polygons(model, q: np.ndarray, box_pose: np.ndarray) -> tuple[list, np
     for i, cyl in enumerate(getattr(model, "visual_cylinders", ())):
         if cyl is None:
             continue
-        p_i, n_i = cylinder_polygons(*cyl, kin.R[i], kin.p[i])
+        p_i, n_i = cylinder_polygons(*cyl, kin.R[i], kin.o[i])
         polys += p_i
         colors.append(shade(body_color(model, i), n_i))
     half = model.boxes[0].half if model.boxes else np.full(3, 0.05)
