@@ -1,6 +1,6 @@
 """Energy, work and contact analysis of a simulated trajectory (figures 4-9 of [COBRA]).
 
-Implements: the work and power definitions of notes C18 (the paper plots them, it does not
+Implements: the work and power definitions of assumption A18 (the paper plots them, it does not
 define them). For the N steps k of a trajectory with midpoint velocities
 u_mid,k = (u_k + u_k+1) / 2 (the velocity at which the stepper's energy ledger closes exactly)::
 
@@ -39,7 +39,7 @@ JOINT_VELOCITIES = slice(6, 6 + N_JOINTS)  # the joint rates in qd (after the he
 def joint_rates(traj) -> np.ndarray:
     """(N, 11) joint velocities at each step's midpoint, (u_k + u_k+1) / 2.
 
-    Helper: the qdot_j of notes C18.
+    Helper: the qdot_j of assumption A18.
     """
     qd = traj.qd[:, JOINT_VELOCITIES]
     return 0.5 * (qd[:-1] + qd[1:])
@@ -48,7 +48,7 @@ def joint_rates(traj) -> np.ndarray:
 def locomotion_power(traj) -> tuple[np.ndarray, np.ndarray]:
     """(P_loc, |P|_loc), each (N,) [W]: sum_j tau_j qdot_j and sum_j |tau_j qdot_j|.
 
-    Implements: notes C18, locomotion power (paper fig. 7).
+    Implements: assumption A18, locomotion power (paper fig. 7).
     """
     per_joint = traj.tau * joint_rates(traj)
     return per_joint.sum(axis=1), np.abs(per_joint).sum(axis=1)
@@ -57,7 +57,7 @@ def locomotion_power(traj) -> tuple[np.ndarray, np.ndarray]:
 def locomotion_work(traj) -> np.ndarray:
     """(N+1,) cumulative locomotion work W_loc(t) = integral sum_j |tau_j qdot_j| dt [J], W_loc(0) = 0.
 
-    Implements: notes C18, locomotion work (paper fig. 6, vertical axis).
+    Implements: assumption A18, locomotion work (paper fig. 6, vertical axis).
     """
     return np.concatenate([[0.0], np.cumsum(locomotion_power(traj)[1] * traj.dt)])
 
@@ -91,7 +91,7 @@ def contact_power_on_box(traj, kind: int) -> np.ndarray:
 def box_work(traj) -> np.ndarray:
     """(N+1,) cumulative work W_box(t) done on the box by the robot's contacts [J], W_box(0) = 0.
 
-    Implements: notes C18, work on the box (paper fig. 6, horizontal axis).
+    Implements: assumption A18, work on the box (paper fig. 6, horizontal axis).
     """
     return np.concatenate([[0.0], np.cumsum(contact_power_on_box(traj, ROBOT_BOX) * traj.dt)])
 

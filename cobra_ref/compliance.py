@@ -5,9 +5,9 @@ spring-damper normal contact, smooth stick-slip friction and position-controlled
 torque is bounded by tau_max, each written implicitly over one step as a *compliance* R >= 0
 and an *offset* b of one row of the least-action problem of eq. (6)::
 
-    min_x 1/2 x^T (G + R) x + x^T (J u_free + b)        (x: impulses of the rows)
+    min_x 1/2 x^T (G + R) x + x^T (J qd_free + b)        (x: impulses of the rows)
 
-Its optimality condition on an unconstrained row is w + R x + b = 0, with w = J u+ the row's
+Its optimality condition on an unconstrained row is w + R x + b = 0, with w = J qd+ the row's
 velocity after the step. That is the implicit law of a spring-damper acting on the row's
 coordinate e (the gap, or a joint's error from its reference) with a target rate v_ref::
 

@@ -4,8 +4,8 @@ Implements: [COBRA] eq. (1), written with the signs of [RBDA]::
 
     M(q) qdd + h(q, qd) = tau + sum_i J_i^T f_i,      h = C(q, qd) qd + g(q)
 
-Note: the seed writes M u' - h = sum J^T f with h = C u + G + B tau, which puts gravity and
-actuation on the wrong side; we implement the standard form above (DESIGN.md sec. 3).
+Note: the paper writes M u' - h = sum J^T f with h = C u + G + B tau, which puts gravity and
+actuation on the wrong side; we implement the standard form above (assumption A24).
 Here ``rnea(model, q, qd, qdd) = M qdd + h`` and ``h = rnea(model, q, qd, 0)``.
 """
 

@@ -1,7 +1,7 @@
 """The gait library: joint references q_ref(t), qd_ref(t), qdd_ref(t) for COBRA's 11 joints.
 
 Implements: the fixed-shape lateral rolling (C, S, J and the mirrored J) and the sidewinding of
-[COBRA] sec. "Results", written for COBRA's joints in notes B9 (joints i = 0..10 from the head,
+[COBRA] sec. "Results", written for COBRA's joints (assumption A3; joints i = 0..10 from the head,
 yaw Y = {0, 2, ..., 10}, pitch P = {1, 3, ..., 9}, s_i = i / 10, omega = 2 pi f)::
 
     rolling:      theta_i = kappa_i cos(phi(t))             i in Y
@@ -16,7 +16,7 @@ rest (qd = qdd = 0 at t = 0) in the gait's shape at phi_0, and is at the steady 
 T_ramp on. (Ramping the amplitude instead stands a growing rolling arc up on its middle within
 half a cycle, and it falls over with an impact.)
 
-Bend profiles kappa_i of the rolling shapes (notes B9; defaults notes C10):
+Bend profiles kappa_i of the rolling shapes (defaults: assumption A10):
 
     C          kappa_i = A                                 constant curvature, an arc
     S          kappa_i = A cos(pi s_i)                     curvature changes sign at the middle (J5)
@@ -82,7 +82,7 @@ def _check(name: str, value: float, low: float = 0.0, high: float = np.inf, stri
 class _Periodic:
     """Frequency, phase offset and ramp shared by every gait (see the module docstring)."""
 
-    frequency: float = 0.5  # f [Hz] (notes C10)
+    frequency: float = 0.5  # f [Hz] (assumption A10)
     phase: float = 0.0  # phi_0 [rad]
     ramp_time: float | None = None  # T_ramp [s]; None = one period
 
@@ -102,12 +102,12 @@ class _Periodic:
 class RollingGait(_Periodic):
     """Fixed-shape lateral rolling in the planar bend profile ``shape`` (C, S, J, J-mirror).
 
-    Implements: [COBRA] C-, S- and J-shaped lateral rolling (notes B9).
+    Implements: [COBRA] C-, S- and J-shaped lateral rolling (assumption A10).
     """
 
     shape: str = "C"
-    amplitude: float = 0.5  # A [rad] (notes C10)
-    s_J: float = 0.5  # J only: the hook spans s_i <= s_J (notes C10)
+    amplitude: float = 0.5  # A [rad] (assumption A10)
+    s_J: float = 0.5  # J only: the hook spans s_i <= s_J (assumption A10)
 
     def __post_init__(self):
         if self.shape not in SHAPES:
@@ -137,9 +137,9 @@ class RollingGait(_Periodic):
 
 @dataclass(frozen=True)
 class SidewindingGait(_Periodic):
-    """Sidewinding: the compound serpenoid with COBRA's parity (notes B9, defaults C10).
+    """Sidewinding: the compound serpenoid with COBRA's parity (defaults: assumption A10).
 
-    Implements: [COBRA] sidewinding (notes B9).
+    Implements: [COBRA] sidewinding (assumption A10).
     """
 
     amplitude_yaw: float = 0.6  # A_y [rad]

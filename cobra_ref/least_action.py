@@ -5,15 +5,15 @@ contacts ([n, t1, t2] each, :mod:`cobra_ref.contact`) and, with the position ser
 joint; :mod:`cobra_ref.compliance` gives each row its compliance R and offset b::
 
     G = J M^-1 J^T                                  eq. (5): Delassus matrix
-    c = J u_free + b                                eq. (5): the rows' velocity without impulses
+    c = J qd_free + b                                eq. (5): the rows' velocity without impulses
     min_x  1/2 x^T (G + R) x + x^T c                eq. (6): least action
     s.t.   p_N >= 0,  ||p_T|| <= mu p_N              F_i of eq. (2): Coulomb's circle, per contact
            |lambda_j| <= tau_max dt                  eq. (6) constraint (3), per servo row
 
-Its optimality conditions are eq. (2) at the velocity level. With g = (G + R) x + c, the law's
-residual on each row: a contact carries p_N > 0 only where g_N = 0 (its normal law holds) and
-none where g_N > 0 (it separates); friction sticks (g_T = 0) inside the circle and, on it,
-opposes the slip g_T with magnitude mu p_N (``kkt_residuals`` measures each condition).
+Its optimality conditions are eq. (2) at the velocity level. With r = (G + R) x + c, the law's
+residual on each row: a contact carries p_N > 0 only where r_N = 0 (its normal law holds) and
+none where r_N > 0 (it separates); friction sticks (r_T = 0) inside the circle and, on it,
+opposes the slip r_T with magnitude mu p_N (``kkt_residuals`` measures each condition).
 
 Friction (``solve_least_action``). Coulomb's law bounds friction by mu times the normal
 impulse, itself an unknown, so the problem is a fixed point of QPs: each QP bounds friction by
@@ -35,13 +35,13 @@ are released, which stick, which slide, which servo rows saturate) by Newton's m
 stops (measured on the paper's gaits: about one QP per step). Where Newton's method fails or
 predicts normal impulses more than ``NEWTON_MAX_GROWTH`` times the QP's (a wrong active set),
 the plain update pbar_N <- p_N, theta_i <- angle of z_i is taken instead, with
-z_i = p_T,i - g_T,i / a_i (a_i the mean of contact i's tangential diagonal of G + R: where its
+z_i = p_T,i - r_T,i / a_i (a_i the mean of contact i's tangential diagonal of G + R: where its
 friction would go without a bound). The natural residual of Coulomb's law::
 
     max_i max( |p_N,i - pbar_N,i|,  |p_T,i - P_{mu_i p_N,i}(z_i)| )        (P_r: onto the disk r)
 
 is zero exactly when the bounds used the right normal impulses and every contact sticks
-(z_i inside its disk: g_T = 0) or slides with friction mu p_N opposing its slip. The friction
+(z_i inside its disk: r_T = 0) or slides with friction mu p_N opposing its slip. The friction
 is finally projected onto the circle of its own p_N, so ||p_T|| <= mu p_N holds on every step
 exactly. If ``max_iter`` iterates do not reach the tolerance, the last iterate, projected the
 same way, is the answer (a continuous function of the step's input that keeps friction), and
@@ -70,7 +70,7 @@ class LeastAction(NamedTuple):
     """The least-action problem of one step (module docstring); rows: 3m contact rows, then the servo rows."""
 
     H: np.ndarray  # (n, n) G + R with every compliance that does not depend on pbar_N
-    c: np.ndarray  # (n,) J u_free + b
+    c: np.ndarray  # (n,) J qd_free + b
     mu: np.ndarray  # (m,) friction coefficient per contact
     lo: np.ndarray  # (n - 3m,) lower bounds of the servo rows
     hi: np.ndarray  # (n - 3m,) upper bounds of the servo rows
@@ -189,21 +189,21 @@ def bounds(problem: LeastAction, pbar_N: np.ndarray) -> tuple[np.ndarray, np.nda
 
     Helper: the box of the module docstring's aligned square.
     """
-    r = problem.mu * pbar_N
-    lo = np.column_stack([np.zeros_like(r), -r, -r]).ravel()
-    hi = np.column_stack([np.full_like(r, np.inf), r, r]).ravel()
+    radius = problem.mu * pbar_N
+    lo = np.column_stack([np.zeros_like(radius), -radius, -radius]).ravel()
+    hi = np.column_stack([np.full_like(radius, np.inf), radius, radius]).ravel()
     return np.concatenate([lo, problem.lo]), np.concatenate([hi, problem.hi])
 
 
-def coulomb_split(x: np.ndarray, grad: np.ndarray, H: np.ndarray, m: int):
-    """(p_N (m,), p_T (m, 2), z (m, 2)): normal and friction impulses, and z = p_T - g_T / a.
+def coulomb_split(x: np.ndarray, r: np.ndarray, H: np.ndarray, m: int):
+    """(p_N (m,), p_T (m, 2), z (m, 2)): normal and friction impulses, and z = p_T - r_T / a.
 
     Helper: z_i is where contact i's friction would go without its bound (module docstring);
     a_i is the mean of its two tangential diagonal entries of H.
     """
     p = x[:3 * m].reshape(m, 3)
-    g_T = grad[:3 * m].reshape(m, 3)[:, 1:]
-    return p[:, 0], p[:, 1:], p[:, 1:] - g_T / _tangential_diagonal(H, m)[:, None]
+    r_T = r[:3 * m].reshape(m, 3)[:, 1:]
+    return p[:, 0], p[:, 1:], p[:, 1:] - r_T / _tangential_diagonal(H, m)[:, None]
 
 
 def project_disk(v: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -271,20 +271,20 @@ class ActiveSet(NamedTuple):
     at_hi: np.ndarray  # (n - 3m,) servo rows held at their upper bound
 
 
-def active_set(problem: LeastAction, x: np.ndarray, grad: np.ndarray, H: np.ndarray) -> ActiveSet:
-    """The active set of impulses x with gradient grad: released, sliding, saturated rows.
+def active_set(problem: LeastAction, x: np.ndarray, r: np.ndarray, H: np.ndarray) -> ActiveSet:
+    """The active set of impulses x with residual r = H x + c: released, sliding, saturated rows.
 
     Helper: released = p_N below RELEASED max p_N; sliding = |z_i| > mu p_N,i (the friction would
     leave its circle without the bound); a servo row is held at a bound it sits on when its
     gradient pushes against that bound.
     """
     m = problem.m
-    p_N, _, z = coulomb_split(x, grad, H, m)
+    p_N, _, z = coulomb_split(x, r, H, m)
     released = p_N <= RELEASED * max(float(p_N.max(initial=0.0)), 1e-300)
     sliding = ~released & (np.hypot(*z.T) > problem.mu * p_N)
-    x_s, g_s = x[3 * m:], grad[3 * m:]
+    x_s, r_s = x[3 * m:], r[3 * m:]
     tol = 1e-9 * max(float(np.abs(problem.hi).max(initial=0.0)), 1e-300)
-    return ActiveSet(released, sliding, (x_s <= problem.lo + tol) & (g_s >= 0), (x_s >= problem.hi - tol) & (g_s <= 0))
+    return ActiveSet(released, sliding, (x_s <= problem.lo + tol) & (r_s >= 0), (x_s >= problem.hi - tol) & (r_s <= 0))
 
 
 def coulomb_newton(problem: LeastAction, x: np.ndarray, rounds: int = 4, steps: int = 4):
@@ -294,9 +294,9 @@ def coulomb_newton(problem: LeastAction, x: np.ndarray, rounds: int = 4, steps: 
     angle theta_i of each sliding contact as an extra unknown, the conditions are a square
     system in (x, theta_S)::
 
-        g_j = 0                              every free row j (g = (G + R(x)) x + c)
+        r_j = 0                              every free row j (r = (G + R(x)) x + c)
         x_j = 0 (released contact), x_j = bound (saturated servo row)
-        p_T,i = mu_i p_N,i e(theta_i),  e_perp(theta_i) . g_T,i = 0      every sliding contact i
+        p_T,i = mu_i p_N,i e(theta_i),  e_perp(theta_i) . r_T,i = 0      every sliding contact i
 
     (friction on its circle, pointing against the slip), with R(x) the stick-slip compliance of
     the compliant law, which depends on p_N. The active set starts as x's (``active_set``); after
@@ -328,9 +328,9 @@ def _newton_on(problem: LeastAction, x, act: ActiveSet, steps: int):
     m, n = problem.m, len(x)
     S = np.flatnonzero(act.sliding)
     H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
-    p_T0, g_T0 = x[:3 * m].reshape(m, 3)[:, 1:], (H @ x + problem.c)[:3 * m].reshape(m, 3)[:, 1:]
+    p_T0, r_T0 = x[:3 * m].reshape(m, 3)[:, 1:], (H @ x + problem.c)[:3 * m].reshape(m, 3)[:, 1:]
     # the sliding contacts' angles start at their friction's direction (against the slip if it has none yet)
-    start = np.where((np.hypot(*p_T0.T) > 0)[:, None], p_T0, -g_T0)
+    start = np.where((np.hypot(*p_T0.T) > 0)[:, None], p_T0, -r_T0)
     theta = np.arctan2(start[:, 1], start[:, 0])
     pinned = np.concatenate([np.repeat(act.released, 3), act.at_lo | act.at_hi])
     target = np.concatenate([np.zeros(3 * m), np.where(act.at_lo, problem.lo, problem.hi)])
@@ -349,23 +349,23 @@ def _newton_on(problem: LeastAction, x, act: ActiveSet, steps: int):
 def _corrected(problem: LeastAction, X, theta, act: ActiveSet) -> ActiveSet:
     """The active set after the changes that the Newton solution (X, theta) of ``act`` asks for."""
     m = problem.m
-    g = hessian(problem, np.maximum(X[0:3 * m:3], 0.0)) @ X + problem.c
+    r = hessian(problem, np.maximum(X[0:3 * m:3], 0.0)) @ X + problem.c
     p = X[:3 * m].reshape(m, 3)
-    g3 = g[:3 * m].reshape(m, 3)
+    r3 = r[:3 * m].reshape(m, 3)
     e = np.column_stack([np.cos(theta), np.sin(theta)])
     tol = 1e-9 * max(float(np.abs(p[:, 0]).max(initial=0.0)), 1e-300)  # impulses
-    tol_g = 1e-9 * max(float(np.abs(g3).max(initial=0.0)), 1e-300)  # the laws' residuals (velocities)
+    tol_r = 1e-9 * max(float(np.abs(r3).max(initial=0.0)), 1e-300)  # the laws' residuals (velocities)
     outside = np.hypot(*p[:, 1:].T) > problem.mu * p[:, 0] + tol
-    turned = (e * g3[:, 1:]).sum(axis=1) > tol_g  # the slip runs along the friction: it should stick
-    engaged = act.released & (g3[:, 0] < -tol_g)  # a released contact that would close: it is engaged, sliding
+    turned = (e * r3[:, 1:]).sum(axis=1) > tol_r  # the slip runs along the friction: it should stick
+    engaged = act.released & (r3[:, 0] < -tol_r)  # a released contact that would close: it is engaged, sliding
     released = (act.released & ~engaged) | (~act.released & (p[:, 0] < -tol))
     sliding = ~released & ((act.sliding & ~turned) | (~act.sliding & outside) | engaged)
-    x_s, g_s, lo, hi = X[3 * m:], g[3 * m:], problem.lo, problem.hi
+    x_s, r_s, lo, hi = X[3 * m:], r[3 * m:], problem.lo, problem.hi
     tol_s = 1e-9 * max(float(np.abs(hi).max(initial=0.0)), 1e-300)
-    tol_gs = 1e-9 * max(float(np.abs(g_s).max(initial=0.0)), 1e-300)
+    tol_rs = 1e-9 * max(float(np.abs(r_s).max(initial=0.0)), 1e-300)
     free = ~act.at_lo & ~act.at_hi
-    at_lo = (act.at_lo & (g_s >= -tol_gs)) | (free & (x_s < lo - tol_s))
-    at_hi = (act.at_hi & (g_s <= tol_gs)) | (free & (x_s > hi + tol_s))
+    at_lo = (act.at_lo & (r_s >= -tol_rs)) | (free & (x_s < lo - tol_s))
+    at_hi = (act.at_hi & (r_s <= tol_rs)) | (free & (x_s > hi + tol_s))
     return ActiveSet(released, sliding, at_lo, at_hi)
 
 
@@ -375,20 +375,20 @@ def _newton_system(problem: LeastAction, X, theta, S, pinned, target):
     p_N = np.maximum(X[0:3 * m:3], 0.0)
     R_T = stick_slip(problem, p_N)
     H = hessian(problem, p_N, R_T)
-    g = H @ X + problem.c
+    r = H @ X + problem.c
     K, F = np.zeros((n + s, n + s)), np.zeros(n + s)
-    K[:n, :n], F[:n] = H, g
-    # the stick-slip compliance R_T = v_s / (mu p_N) (where not capped): d g_T / d p_N = -v_s p_T / (mu p_N^2)
+    K[:n, :n], F[:n] = H, r
+    # the stick-slip compliance R_T = v_s / (mu p_N) (where not capped): d r_T / d p_N = -v_s p_T / (mu p_N^2)
     i = np.flatnonzero((R_T > 0) & (R_T < STICK_SLIP_MAX * _tangential_diagonal(problem.H, m)) & (p_N > 0))
     dR = -v_s / (problem.mu[i] * p_N[i] ** 2)
     K[3 * i + 1, 3 * i] += dR * X[3 * i + 1]
     K[3 * i + 2, 3 * i] += dR * X[3 * i + 2]
-    # sliding contact i (row n + k): p_T = mu p_N e(theta) and e_perp . g_T = 0, d e_perp / d theta = -e
+    # sliding contact i (row n + k): p_T = mu p_N e(theta) and e_perp . r_T = 0, d e_perp / d theta = -e
     N, T1, T2, D = 3 * S, 3 * S + 1, 3 * S + 2, n + np.arange(s)
     mu, c, sn = problem.mu[S], np.cos(theta[S]), np.sin(theta[S])
     K[D, :n] = -sn[:, None] * K[T1, :n] + c[:, None] * K[T2, :n]
-    F[D] = -sn * g[T1] + c * g[T2]
-    K[D, D] = -(c * g[T1] + sn * g[T2])
+    F[D] = -sn * r[T1] + c * r[T2]
+    K[D, D] = -(c * r[T1] + sn * r[T2])
     K[T1], K[T2] = 0.0, 0.0
     K[T1, T1] = K[T2, T2] = 1.0
     K[T1, N], K[T2, N] = -mu * c, -mu * sn
@@ -407,7 +407,7 @@ def kkt_residuals(problem: LeastAction, x: np.ndarray) -> dict:
 
     Implements: the velocity-level conditions of [COBRA] eq. (2) for the compliant or rigid law:
 
-    * ``complementarity`` max_i |p_N,i g_N,i| [N s m/s] with g = (G + R) x + c the law's
+    * ``complementarity`` max_i |p_N,i r_N,i| [N s m/s] with r = (G + R) x + c the law's
       residual (zero in contact, >= 0 when separating);
     * ``cone_residual`` max_i (||p_T,i|| - mu_i p_N,i)_+ / max p_N: friction outside Coulomb's circle;
     * ``coulomb_residual``: the natural residual of Coulomb's law (``natural_residual`` with
@@ -417,9 +417,9 @@ def kkt_residuals(problem: LeastAction, x: np.ndarray) -> dict:
     if m == 0:
         return {"complementarity": 0.0, "cone_residual": 0.0, "coulomb_residual": 0.0}
     H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
-    grad = H @ x + problem.c
-    p_N, p_T, z = coulomb_split(x, grad, H, m)
+    r = H @ x + problem.c
+    p_N, p_T, z = coulomb_split(x, r, H, m)
     scale = max(float(p_N.max()), 1e-300)
     cone = np.maximum(np.hypot(*p_T.T) - problem.mu * p_N, 0.0).max() / scale
-    return {"complementarity": float(np.abs(p_N * grad[0:3 * m:3]).max()), "cone_residual": float(cone),
+    return {"complementarity": float(np.abs(p_N * r[0:3 * m:3]).max()), "cone_residual": float(cone),
             "coulomb_residual": natural_residual(p_N, p_T, z, p_N, problem.mu)}

@@ -11,7 +11,7 @@ Conventions, and where MuJoCo differs from cobra_ref:
 * ``<compiler angle="radian"/>`` and w-first quaternions are written explicitly (MJCF's
   default unit is degrees);
 * every body has an explicit ``<inertial>`` (MuJoCo must not infer inertia from geoms);
-* contact: cobra_ref solves hard contact (issue 3); MuJoCo's contact is soft (solref/solimp).
+* contact: MuJoCo's contact is soft (solref/solimp), cobra_ref's compliant or rigid (compliance.py).
   ``solref`` (time constant 4 ms = 4 dt, critical damping) is chosen as stiff as MuJoCo's
   stability rule (time constant >= 2 dt) comfortably allows; compare rollouts in bands.
 * contact filtering: robot spheres touch the ground and the box, never each other; the box
@@ -44,7 +44,7 @@ def to_mjcf(model: Model, timestep: float = 1e-3, kp: float = 100.0, kv: float =
     """MJCF XML string of ``model``: same bodies, inertials, joints, contact geoms, actuators.
 
     Helper: the MuJoCo cross-check's model ([MJ] XML reference). Position actuators (gains ``kp``,
-    ``kv``, force range +-tau_limit) drive every revolute joint; notes C7 gives the range.
+    ``kv``, force range +-tau_limit) drive every revolute joint; assumption A7 gives the range.
     """
     root = ET.Element("mujoco", model=model.name)
     root.append(ET.Comment(" written by cobra_ref.mjcf.to_mjcf; q/qd order identical to cobra_ref "))

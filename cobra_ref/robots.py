@@ -1,18 +1,18 @@
 """Model factories: the COBRA + box scene, and small toys for tutorials and tests.
 
-COBRA's geometry (notes C1-C3, see :mod:`cobra_ref.params` for every number):
+COBRA's geometry (assumptions A1-A3, see :mod:`cobra_ref.params` for every number):
 
 * bodies 0..11 = head, L1..L10, tail; joint k (J0..J10) joins body k and body k+1 and sits on
   the long axis in the middle of the 25 mm gap between the two cylinders;
 * every body's x axis runs along the snake **from tail to head** (x points "forward", towards
   the head), z is "up" and y "left" in the straight, upright pose;
 * even joints yaw (about body z, 'Rz'), odd joints pitch (about body y, 'Ry'): 6 yaw + 5 pitch,
-  J5 = central pitch joint, J6 = central yaw joint (notes B3);
+  J5 = central pitch joint, J6 = central yaw joint (assumption A3);
 * the head is the floating base (free joint, frame at the head's centre of mass); the other
   body frames sit at their parent joint (Featherstone), with the COM half a cylinder behind;
 * the box (body 12) is a second free body, frame at its centre.
 
-Contact spheres (issue 3 uses the same ones, and so does the MJCF export): each cylinder of
+Contact spheres (assumption A16; the MJCF export uses the same ones): each cylinder of
 length L and radius r gets n = max(1, round(L / 2r)) spheres of radius r on its axis, evenly
 spaced: one per body link (r = 53.5 mm covers the 110 mm cylinder: its half-length is 55 mm),
 two on the head, one on the tail. 13 spheres in all. A sphere on the axis with the cylinder's

@@ -2,24 +2,24 @@
 
 Implements: [COBRA] eq. (1)-(6) over one step dt, at the velocity level (semi-implicit Euler)::
 
-    M (u+ - u) = dt (tau_ext - h) + J^T x            eq. (1), impulses x = f dt of the rows J
-    q+ = q (+) dt u+                                  kinematics.integrate
+    M (qd+ - qd) = dt (tau_ext - h) + J^T x            eq. (1), impulses x = f dt of the rows J
+    q+ = q (+) dt qd+                                  kinematics.integrate
 
 ``step`` reads top to bottom:
 
-1. eq. (1): M = crba(q) and h = rnea(q, u, 0) (:mod:`cobra_ref.dynamics`);
+1. eq. (1): M = crba(q) and h = rnea(q, qd, 0) (:mod:`cobra_ref.dynamics`);
 2. the joints (``StepSettings.servo``): ``"position"``, the paper's position-controlled joints:
    every coordinate is free and each joint gets a servo row whose impulse is bounded by
    tau_max dt (:func:`cobra_ref.compliance.servo_rows`); or ``"prescribed"`` (Simscape's
-   "motion provided"): each joint's u+ is the secant to the reference, (q_ref(t + dt) - q) / dt,
+   "motion provided"): each joint's qd+ is the secant to the reference, (q_ref(t + dt) - q) / dt,
    and only the base and the box are free (F); the torques are recovered from eq. (1);
-3. eq. (1) without impulses: u_free over the free coordinates;
+3. eq. (1) without impulses: qd_free over the free coordinates;
 4. eq. (2)-(4): the contacts and their Jacobian J_c (:mod:`cobra_ref.contact`);
 5. eq. (5): the rows J = [J_c; J_servo] over F, the Delassus matrix G and c, with each row's
    compliance and offset from its law (``StepSettings.contact``: ``"compliant"`` or ``"rigid"``);
 6. eq. (6): the impulses x, Coulomb's friction by a fixed point of OSQP solves
    (:mod:`cobra_ref.least_action`), started from the previous step's impulses;
-7. u+ = u_free + M_FF^-1 J^T x, the joint torques, and q+.
+7. qd+ = qd_free + M_FF^-1 J^T x, the joint torques, and q+.
 
 The faster path :class:`cobra_ref.fast.stepper.FastStepper` takes the same step with batched
 dynamics and contacts and certified QP solves; tests run both side by side.
@@ -85,16 +85,16 @@ class StepResult(NamedTuple):
     tau: np.ndarray  # (n_joints,) joint torques over the step [N m]
     contacts: Contacts  # the candidates at the start of the step
     p: np.ndarray  # (3m,) contact impulses in the contact frames [N s]
-    w: np.ndarray  # (3m,) contact velocities after the step, J_c u+ [m/s]
+    w: np.ndarray  # (3m,) contact velocities after the step, J_c qd+ [m/s]
     info: LeastActionInfo
     residuals: dict  # kkt_residuals of the impulses
-    approach: np.ndarray  # (m,) normal approach speed of each contact before the step, max(0, -J_N u) [m/s]
+    approach: np.ndarray  # (m,) normal approach speed of each contact before the step, max(0, -J_N qd) [m/s]
     G_NN: np.ndarray  # (m,) the Delassus matrix's normal diagonal [1/kg]: 1 / G_NN is the mass the contact sees
     kinetic: float  # kinetic energy at the start of the step [J]
     potential: float  # gravitational potential energy at the start of the step [J]
     elastic: float  # energy stored in compressed compliant contacts at the start of the step [J]
-    work_actuators: float  # dt tau . u_mid over the joints, u_mid = (u + u+) / 2 [J]
-    work_contacts: float  # x_c . J_c u_mid: work of the contact impulses [J]
+    work_actuators: float  # dt tau . qd_mid over the joints, qd_mid = (qd + qd+) / 2 [J]
+    work_contacts: float  # x_c . J_c qd_mid: work of the contact impulses [J]
     memory: dict  # where the next step's friction fixed point starts (warm_start_memory)
 
 
@@ -108,39 +108,39 @@ def step(model: Model, q, qd, t: float, reference, settings: StepSettings = Step
     """
     dt, joints = settings.dt, joint_coordinates(model)
     tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
-    # Step 1: eq. (1), M(q) and h(q, u)
+    # Step 1: eq. (1), M(q) and h(q, qd)
     kin = forward_kinematics(model, q)
     M, h = crba(model, q), bias_force(model, q, qd)
     # Step 2: the joints -- free coordinates F; prescribed joints move to their reference
-    u_next = qd.copy()
+    qd_next = qd.copy()
     if settings.servo == "prescribed":
-        u_next[joints.v] = (_reference(reference, t + dt)[0] - q[joints.q]) / dt
+        qd_next[joints.v] = (_reference(reference, t + dt)[0] - q[joints.q]) / dt
         F = np.setdiff1d(np.arange(model.nv), joints.v)
     else:
         F = np.arange(model.nv)
     P = np.setdiff1d(np.arange(model.nv), F)
-    # Step 3: eq. (1) without impulses for the free coordinates: M_FF (u_free - u)_F = rhs
-    rhs = dt * (tau_ext - h)[F] - M[np.ix_(F, P)] @ (u_next[P] - qd[P])
-    u_next[F] = qd[F] + np.linalg.solve(M[np.ix_(F, F)], rhs)
+    # Step 3: eq. (1) without impulses for the free coordinates: M_FF (qd_free - qd)_F = rhs
+    rhs = dt * (tau_ext - h)[F] - M[np.ix_(F, P)] @ (qd_next[P] - qd[P])
+    qd_next[F] = qd[F] + np.linalg.solve(M[np.ix_(F, F)], rhs)
     # Step 4: eq. (2)-(4), the contacts and J_c
     contacts = find_contacts(model, q, settings.margin, kin)
     J_c = contact_jacobian(model, q, contacts, kin)
     # Step 5: eq. (5), the rows J over F, the Delassus matrix G and the least-action problem
     J = np.vstack([J_c, _servo_jacobian(model, joints, settings)])
     G, Minv_JT = delassus(J[:, F], M[np.ix_(F, F)])
-    problem = least_action_problem(model, G, J @ u_next, contacts, q, t, reference, settings)
+    problem = least_action_problem(model, G, J @ qd_next, contacts, q, t, reference, settings)
     # Step 6: eq. (6), the impulses, starting from the previous step's
     x, info = solve_least_action(problem, warm_start(contacts, previous, len(problem.c)))
     # Step 7: the velocity after the step, the joint torques, the position
-    u_next[F] += Minv_JT @ x
+    qd_next[F] += Minv_JT @ x
     p = x[:3 * contacts.m]
     if settings.servo == "prescribed":
-        tau = (M @ (u_next - qd) / dt + h - J_c.T @ p / dt - tau_ext)[joints.v]
+        tau = (M @ (qd_next - qd) / dt + h - J_c.T @ p / dt - tau_ext)[joints.v]
     else:
         tau = x[3 * contacts.m:] / dt
-    return StepResult(integrate(model, q, u_next, dt), u_next, tau, contacts, p, J_c @ u_next, info,
+    return StepResult(integrate(model, q, qd_next, dt), qd_next, tau, contacts, p, J_c @ qd_next, info,
                       kkt_residuals(problem, x), approach_speed(J_c, qd), np.diag(G)[:3 * contacts.m:3],
-                      *energies(model, qd, u_next, M, contacts, J_c, p, tau, potential_energy(model, q), settings),
+                      *energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential_energy(model, q), settings),
                       warm_start_memory(contacts, x))
 
 
@@ -177,7 +177,7 @@ def _servo_jacobian(model: Model, joints: JointCoordinates, settings: StepSettin
 
 def least_action_problem(model: Model, G, c_free, contacts: Contacts, q, t: float, reference,
                          settings: StepSettings) -> LeastAction:
-    """The least-action problem of eq. (6): H = G + R and c = J u_free + b over the rows.
+    """The least-action problem of eq. (6): H = G + R and c = J qd_free + b over the rows.
 
     Implements: [COBRA] eq. (5)-(6) with each row's compliance R and offset b
     (:mod:`cobra_ref.compliance`): contact normals and friction under ``settings.contact``,
@@ -233,27 +233,27 @@ def warm_start_memory(contacts: Contacts, x: np.ndarray) -> dict:
 
 
 def approach_speed(J_c: np.ndarray, qd) -> np.ndarray:
-    """(m,) normal approach speed of each contact before the step, max(0, -J_N u) [m/s].
+    """(m,) normal approach speed of each contact before the step, max(0, -J_N qd) [m/s].
 
-    Implements: the gap rate g' = J_c u of [COBRA] eq. (4) on the normal rows, where it is
+    Implements: the gap rate g' = J_c qd of [COBRA] eq. (4) on the normal rows, where it is
     negative (closing): the paper's non-impulsive condition asks for no contact force while it is.
     """
     return np.maximum(-(J_c[0::3] @ qd), 0.0)
 
 
-def energies(model, qd, u_next, M, contacts, J_c, p, tau, potential: float, settings: StepSettings):
+def energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential: float, settings: StepSettings):
     """(kinetic, potential, elastic, work_actuators, work_contacts) of one step (StepResult).
 
-    Helper: the energy ledger, at the midpoint velocity u_mid = (u + u+) / 2, for which
-    Delta KE = u_mid . M (u+ - u) exactly at fixed M; the elastic energy is
+    Helper: the energy ledger, at the midpoint velocity qd_mid = (qd + qd+) / 2, for which
+    Delta KE = qd_mid . M (qd+ - qd) exactly at fixed M; the elastic energy is
     sum 1/2 k g^2 over the compressed contacts (g < 0) of the compliant law.
     """
-    u_mid = 0.5 * (qd + u_next)
+    qd_mid = 0.5 * (qd + qd_next)
     elastic = 0.0
     if settings.contact == "compliant":
         elastic = float(0.5 * model.contact_stiffness * np.sum(np.minimum(contacts.g, 0.0) ** 2))
-    return (0.5 * float(qd @ M @ qd), potential, elastic, settings.dt * float(tau @ u_mid[joint_coordinates(model).v]),
-            float(p @ (J_c @ u_mid)))
+    return (0.5 * float(qd @ M @ qd), potential, elastic, settings.dt * float(tau @ qd_mid[joint_coordinates(model).v]),
+            float(p @ (J_c @ qd_mid)))
 
 
 def _reference(reference, t: float):

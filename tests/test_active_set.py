@@ -1,6 +1,6 @@
 """Certified active-set solves of box QPs (cobra_ref/fast/active_set.py) against hand-solved QPs and OSQP.
 
-The QP: min 1/2 x^T P x + q^T x  s.t.  lo <= x <= hi, P positive definite (every least-action
+The QP: min 1/2 x^T H x + c^T x  s.t.  lo <= x <= hi, H positive definite (every least-action
 iterate has this form). An answer is accepted only if it satisfies the KKT conditions at
 OSQP's tolerances, so every test here checks one of two things: a certified answer is the
 minimiser (against a hand solution or OSQP), and a wrong answer is refused, never returned.
@@ -16,33 +16,33 @@ from cobra_ref.qp import EPS, solve_box_qp
 
 
 def test_diagonal_box_qp_is_solved_by_clipping_the_unconstrained_minimiser():
-    """P = diag(d): the problem separates, x_i = clip(-q_i / d_i, lo_i, hi_i) (worked by hand).
+    """H = diag(d): the problem separates, x_i = clip(-q_i / d_i, lo_i, hi_i) (worked by hand).
 
-    d = (1, 2, 4), q = (-3, 1, -2): unconstrained minimiser (3, -0.5, 0.5); with lo = (0, 0, -1)
+    d = (1, 2, 4), c = (-3, 1, -2): unconstrained minimiser (3, -0.5, 0.5); with lo = (0, 0, -1)
     and hi = (2, inf, 1) the answer is (2, 0, 0.5): x_0 held at hi (gradient 2 - 3 = -1 <= 0),
     x_1 held at lo (gradient 0 + 1 = 1 >= 0), x_2 free (gradient 0).
     """
-    P, q = np.diag([1.0, 2.0, 4.0]), np.array([-3.0, 1.0, -2.0])
+    H, c = np.diag([1.0, 2.0, 4.0]), np.array([-3.0, 1.0, -2.0])
     lo, hi = np.array([0.0, 0.0, -1.0]), np.array([2.0, np.inf, 1.0])
-    x, at_lo, at_hi, g = solve_box(P, q, lo, hi, np.zeros(3), EPS, EPS)
+    x, at_lo, at_hi, r = solve_box(H, c, lo, hi, np.zeros(3), EPS, EPS)
     np.testing.assert_allclose(x, [2.0, 0.0, 0.5], atol=1e-15)
     np.testing.assert_array_equal(at_lo, [False, True, False])
     np.testing.assert_array_equal(at_hi, [True, False, False])
-    np.testing.assert_allclose(g, [-1.0, 1.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(r, [-1.0, 1.0, 0.0], atol=1e-15)
 
 
 def test_a_coupled_box_qp_reaches_the_minimiser_from_a_wrong_start_in_a_few_rounds():
-    """P = [[2, 1], [1, 2]], q = (-4, 1), x >= 0 (worked by hand).
+    """H = [[2, 1], [1, 2]], c = (-4, 1), x >= 0 (worked by hand).
 
-    Unconstrained: x = P^-1 (-q) = (1/3) [[2, -1], [-1, 2]] (4, -1) = (3, -2): x_1 < 0, so x_1
+    Unconstrained: x = H^-1 (-c) = (1/3) [[2, -1], [-1, 2]] (4, -1) = (3, -2): x_1 < 0, so x_1
     is held at 0 and 2 x_0 = 4, x_0 = 2; the gradient of x_1 there is 1 * 2 + 1 = 3 >= 0: the
     KKT point (2, 0).
     Started from (0, 5) (x_0 held, x_1 free: the wrong set), the rounds must find it.
     """
-    P, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-4.0, 1.0])
-    x, at_lo, at_hi, g = solve_box(P, q, np.zeros(2), np.full(2, np.inf), np.array([0.0, 5.0]), EPS, EPS)
+    H, c = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-4.0, 1.0])
+    x, at_lo, at_hi, r = solve_box(H, c, np.zeros(2), np.full(2, np.inf), np.array([0.0, 5.0]), EPS, EPS)
     np.testing.assert_allclose(x, [2.0, 0.0], atol=1e-14)
-    np.testing.assert_allclose(g, [0.0, 3.0], atol=1e-14)
+    np.testing.assert_allclose(r, [0.0, 3.0], atol=1e-14)
 
 
 def test_the_box_certificate_accepts_the_minimiser_and_refuses_each_kind_of_wrong_answer():
@@ -56,12 +56,12 @@ def test_the_box_certificate_accepts_the_minimiser_and_refuses_each_kind_of_wron
     * (1, 0) with x_1 held: x_0 is free but its gradient 2 - 4 = -2 is not zero (stationarity);
     * (0, 0) with x_0 and x_1 held at 0: x_0's gradient -4 < 0 would pull it up (dual).
     """
-    P, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-4.0, 1.0])
+    H, c = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-4.0, 1.0])
     lo, hi = np.zeros(2), np.full(2, 10.0)
     no, yes = False, True
 
     def certified(x, at_lo, at_hi):
-        return box_certificate(P, q, lo, hi, np.array(x), np.array(at_lo), np.array(at_hi), EPS, EPS)
+        return box_certificate(H, c, lo, hi, np.array(x), np.array(at_lo), np.array(at_hi), EPS, EPS)
 
     assert certified([2.0, 0.0], [no, yes], [no, no])
     assert not certified([3.0, -2.0], [no, no], [no, no])
@@ -88,38 +88,38 @@ def _random_box_qp(rng, m=4, n_dof=12, n_servo=3):
     M = A @ A.T + n_dof * np.eye(n_dof)
     J = rng.normal(size=(3 * m + n_servo, n_dof))
     G = J @ np.linalg.solve(M, J.T)
-    P = 0.5 * (G + G.T) + 1e-2 * np.diag(np.diag(G))
-    q = rng.normal(size=len(P))
-    q[0:3 * m:3] = rng.uniform(-1.0, 0.3, size=m)
+    H = 0.5 * (G + G.T) + 1e-2 * np.diag(np.diag(G))
+    c = rng.normal(size=len(H))
+    c[0:3 * m:3] = rng.uniform(-1.0, 0.3, size=m)
     r = rng.uniform(0.0, 0.5, size=m)
     lo = np.concatenate([np.column_stack([np.zeros(m), -r, -r]).ravel(), -np.full(n_servo, 0.3)])
     hi = np.concatenate([np.column_stack([np.full(m, np.inf), r, r]).ravel(), np.full(n_servo, 0.3)])
-    return P, q, lo, hi
+    return H, c, lo, hi
 
 
 def test_certified_solutions_equal_osqp_on_random_least_action_qps(rng):
     """From OSQP's loose (1e-4) iterate, the certified answer equals OSQP's tight (1e-10) solution.
 
-    Tolerance: P is strongly convex, so a point whose KKT residual is r lies within
-    r / lambda_min(P) of the minimiser; both answers satisfy r <= EPS (1 + |q|).
+    Tolerance: H is strongly convex, so a point whose KKT residual is r lies within
+    r / lambda_min(H) of the minimiser; both answers satisfy r <= EPS (1 + |c|).
     """
     accepted = 0
     for trial in range(8):
-        P, q, lo, hi = _random_box_qp(rng)
+        H, c, lo, hi = _random_box_qp(rng)
         solutions = []
         for eps in (1e-4, 1e-10):
             solver = osqp.OSQP()
-            solver.setup(P=sparse.triu(sparse.csc_matrix(P), format="csc"), q=q, A=sparse.identity(len(q), format="csc"),
+            solver.setup(P=sparse.triu(sparse.csc_matrix(H), format="csc"), q=c, A=sparse.identity(len(c), format="csc"),
                          l=lo, u=hi, eps_abs=eps, eps_rel=eps, polishing=False, verbose=False, max_iter=100000)
             solutions.append(solver.solve(raise_error=False))
         loose, tight = solutions
         assert tight.info.status == "solved"
-        answer = solve_box(P, q, lo, hi, loose.x, EPS, EPS, guess=held_at_bounds(loose.x, lo, hi, loose.y))
+        answer = solve_box(H, c, lo, hi, loose.x, EPS, EPS, guess=held_at_bounds(loose.x, lo, hi, loose.y))
         if answer is None:
             continue
         accepted += 1
-        lam_min = np.linalg.eigvalsh(P)[0]
-        np.testing.assert_allclose(answer[0], tight.x, atol=2 * EPS * (1 + np.abs(q).max()) / lam_min)
+        lam_min = np.linalg.eigvalsh(H)[0]
+        np.testing.assert_allclose(answer[0], tight.x, atol=2 * EPS * (1 + np.abs(c).max()) / lam_min)
     assert accepted >= 6, f"only {accepted} of 8 loose iterates led to a certified answer"
 
 
@@ -128,11 +128,11 @@ def test_the_fast_box_qp_equals_a_fresh_osqp_solve(rng):
     later ones, tight OSQP otherwise) returns the minimiser that cobra_ref.qp.solve_box_qp does."""
     fast = FastBoxQP()
     for trial in range(8):
-        P, q, lo, hi = _random_box_qp(rng)
+        H, c, lo, hi = _random_box_qp(rng)
         if trial % 2 == 0:
             fast.new_step()
-        reference = solve_box_qp(P, q, lo, hi)
-        answer = fast(P, q, lo, hi, np.zeros(len(q)))
-        lam_min = np.linalg.eigvalsh(P)[0]
-        np.testing.assert_allclose(answer.x, reference.x, atol=4 * EPS * (1 + np.abs(q).max()) / lam_min)
+        reference = solve_box_qp(H, c, lo, hi)
+        answer = fast(H, c, lo, hi, np.zeros(len(c)))
+        lam_min = np.linalg.eigvalsh(H)[0]
+        np.testing.assert_allclose(answer.x, reference.x, atol=4 * EPS * (1 + np.abs(c).max()) / lam_min)
         assert answer.solves >= (1 if trial % 2 == 0 else 0)

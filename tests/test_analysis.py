@@ -1,4 +1,4 @@
-"""Worked checks of the work, power and contact-force analysis (notes C18, figs. 4-9)."""
+"""Worked checks of the work, power and contact-force analysis (assumption A18, figs. 4-9)."""
 
 import numpy as np
 import pytest

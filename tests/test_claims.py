@@ -50,7 +50,7 @@ def test_claims_json_has_the_issue_keys(quick_run):
 
 def test_work_on_the_box_recomputed_by_hand_from_the_npz(quick_run):
     """Claim WB's number for J, recomputed from the cached trajectory with an explicit loop:
-    W_box = sum over robot-box rows of (-f) . (v + omega x (p - x_box)) dt (notes C18)."""
+    W_box = sum over robot-box rows of (-f) . (v + omega x (p - x_box)) dt (assumption A18)."""
     with open(os.path.join(quick_run, "claims.json")) as f:
         wb = next(c for c in json.load(f) if c["id"] == "WB")
     path, = glob.glob(os.path.join(quick_run, ".cache", "J-" + "?" * 16 + ".npz"))  # not J-mirror-...

@@ -1,4 +1,4 @@
-"""Every figure script runs on short simulations and writes real images (STYLE.md C1.6 and C7).
+"""Every figure script runs on short simulations and writes real images (the house style).
 
 The session fixture simulates 0.5 s of each paper gait into a temporary cache (about 15 s on two
 cores), so the tests need nothing but a clean clone.

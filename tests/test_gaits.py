@@ -1,4 +1,4 @@
-"""The gait library (cobra_ref/gaits.py, notes B9): shapes by hand, limits, smoothness, periodicity."""
+"""The gait library (cobra_ref/gaits.py, assumption A10): shapes by hand, limits, smoothness, periodicity."""
 
 import numpy as np
 import pytest
@@ -6,7 +6,7 @@ import pytest
 from cobra_ref.gaits import GAITS, YAW, GaitError, RollingGait, SidewindingGait, gait, ramped_phase
 from cobra_ref.params import CobraParameters
 
-T_RUN, DT = 10.0, 1e-3  # the paper's run time (notes C11) and our step
+T_RUN, DT = 10.0, 1e-3  # the paper's run time (assumption A11) and our step
 NAMES = ["C", "S", "J", "J-mirror", "sidewinding"]
 
 

@@ -1,4 +1,4 @@
-"""MuJoCo rollouts of the exported model as worked examples (design brief sec. 7).
+"""MuJoCo rollouts of the exported model as worked examples (compared in bands, not equality).
 
 The box at rest must stay at rest, the kinematic servo must follow the reference, and a C roll
 must push the box in MuJoCo; ``compare`` then reports how it agrees with our simulator.
@@ -143,7 +143,7 @@ def test_bad_mode_and_mismatched_layout_are_refused(cobra, cobra_robot):
 
 
 def test_public_functions_name_what_they_implement():
-    """STYLE.md C4, as tests/test_docstrings_cite.py checks the physics modules."""
+    """Every public function names what it implements, as tests/test_docstrings_cite.py checks."""
     module = importlib.import_module("cobra_ref.reproduce.mujoco_check")
     for fname, obj in vars(module).items():
         if fname.startswith("_") or not inspect.isfunction(obj) or obj.__module__ != module.__name__:

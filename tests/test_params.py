@@ -18,7 +18,7 @@ def test_every_parameter_has_a_source_and_a_unit():
 def test_cylinder_geometry_reproduces_the_paper_inertias():
     """A solid cylinder of the derived (L, r) and 0.5 kg has the paper's inertias within 2 %.
 
-    I_xx = m r^2 / 2, I_yy = I_zz = m (3 r^2 + L^2) / 12 (notes B1). The paper's Iyy and Izz
+    I_xx = m r^2 / 2, I_yy = I_zz = m (3 r^2 + L^2) / 12 (assumption A1). The paper's Iyy and Izz
     differ by <= 5 %, so the cylinder (Iyy = Izz) matches their mean.
     """
     p = CobraParameters()
@@ -30,7 +30,7 @@ def test_cylinder_geometry_reproduces_the_paper_inertias():
 
 
 def test_total_length_is_the_reported_1_7_m():
-    """Head + 10 links + tail + 11 gaps = 1.695 m, the 1.7 m of arXiv 2512.05008 (notes B2)."""
+    """Head + 10 links + tail + 11 gaps = 1.695 m, the 1.7 m of arXiv 2512.05008 (assumption A2)."""
     np.testing.assert_allclose(CobraParameters().total_length, 1.695, atol=1e-12)
     np.testing.assert_allclose(CobraParameters().total_length, 1.7, atol=0.01)
 

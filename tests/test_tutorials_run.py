@@ -27,7 +27,7 @@ def test_tutorial_runs(path, tmp_path, monkeypatch):
 
 
 def test_tutorials_start_with_a_title_cell():
-    """STYLE.md C6: line 1 is a markdown cell with the title."""
+    """The house style of tutorials: line 1 is a markdown cell with the title."""
     for path in TUTORIALS:
         lines = path.read_text().splitlines()
         assert lines[0] == "# %% [markdown]", path.name

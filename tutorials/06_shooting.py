@@ -4,7 +4,7 @@
 # toy (a piston pushing a box, two parameters, a cost landscape you can plot), then on COBRA.
 # **Paper:** [COBRA] sec. "Results": "We take the shooting method to find optimal u_ref for minimized
 # joint torques tau such that generalized contact forces f_ext stand orthogonal to gap functions and
-# their derivative"; Eq. (6) constraints (2), (3) (torque and joint limits); DESIGN.md sec. 5.
+# their derivative"; Eq. (6) constraints (2), (3) (torque and joint limits); assumption A17.
 # **Run:** `python tutorials/06_shooting.py` (about half a minute; writes `06_shooting_landscape.png`
 # and `06_shooting_cobra.png` in the current directory).
 

@@ -5,27 +5,27 @@ Helper (performance) for the least-action iterates of [COBRA] eq. (6)
 from the last, and its active set (the contacts released, the friction at its bound, the servo
 rows that saturate) seldom changes from one iterate, or one step, to the next::
 
-    min_x 1/2 x^T P x + q^T x    s.t.  lo <= x <= hi          (P positive definite)
+    min_x 1/2 x^T H x + c^T x    s.t.  lo <= x <= hi          (H positive definite)
 
-With the variables W held at a bound, the others solve P_FF x_F = -(q_F + P_FW x_W) (one
-Cholesky solve), and since P > 0 the minimiser is unique: the answer is *certified* only if
+With the variables W held at a bound, the others solve H_FF x_F = -(c_F + H_FW x_W) (one
+Cholesky solve), and since H > 0 the minimiser is unique: the answer is *certified* only if
 
     lo_i - tol <= x_i <= hi_i + tol        on every free variable          (primal feasible)
-    g_i >= -tol where held at lo,  g_i <= tol where held at hi              (dual feasible)
-    |g_i| <= eps_abs + eps_rel * scale     on every free variable          (stationarity)
+    r_i >= -tol where held at lo,  r_i <= tol where held at hi              (dual feasible)
+    |r_i| <= eps_abs + eps_rel * scale     on every free variable          (stationarity)
 
-with g = P x + q and tol = eps_abs + eps_rel * scale, OSQP's own termination test, so an
+with r = H x + c and tol = eps_abs + eps_rel * scale, OSQP's own termination test, so an
 accepted answer is as accurate as OSQP's (``box_certificate``). Otherwise OSQP solves it.
 Variables with lo_i = hi_i (a contact whose friction bound is zero) are always held, their
 multiplier may take either sign.
 
 The guess is improved by the primal-dual active-set iteration of Hintermueller, Ito & Kunisch
-(SIAM J. Optim. 13, 2002), with d = diag(P)::
+(SIAM J. Optim. 13, 2002), with d = diag(H)::
 
-    held at lo:  x_i - g_i / d_i <= lo_i,     held at hi:  x_i - g_i / d_i >= hi_i
+    held at lo:  x_i - r_i / d_i <= lo_i,     held at hi:  x_i - r_i / d_i >= hi_i
 
 repeated until the held set stops changing (at most ``ROUNDS`` times), then certified. Full
-rounds can cycle (P is not an M-matrix); then up to ``SINGLE_FLIPS`` more rounds change only
+rounds can cycle (H is not an M-matrix); then up to ``SINGLE_FLIPS`` more rounds change only
 the worst violation beyond its certificate tolerance.
 """
 
@@ -55,36 +55,36 @@ def held_at_bounds(x, lo, hi, y=None):
     return at_lo & np.isfinite(lo), at_hi & np.isfinite(hi)
 
 
-def solve_box(P, q, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = ROUNDS, guess=None):
-    """min 1/2 x^T P x + q^T x s.t. lo <= x <= hi by primal-dual active-set rounds from x0.
+def solve_box(H, c, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = ROUNDS, guess=None):
+    """min 1/2 x^T H x + c^T x s.t. lo <= x <= hi by primal-dual active-set rounds from x0.
 
-    Helper: returns (x, at_lo, at_hi, g) certified by the KKT conditions at OSQP's tolerances,
-    with at_lo/at_hi the masks of the variables held at lo/hi and g = P x + q; or None.
+    Helper: returns (x, at_lo, at_hi, r) certified by the KKT conditions at OSQP's tolerances,
+    with at_lo/at_hi the masks of the variables held at lo/hi and r = H x + c; or None.
     ``guess``: (at_lo, at_hi) to start from instead of the rule applied to x0.
     """
-    d = P.diagonal()
+    d = H.diagonal()
     fixed = lo == hi
     x, before = x0, None
-    for r in range(rounds + SINGLE_FLIPS + 1):
-        g = P @ x + q if (r or guess is None) else None  # the guess needs no gradient
-        if r == 0 and guess is not None:
+    for k in range(rounds + SINGLE_FLIPS + 1):
+        r = H @ x + c if (k or guess is None) else None  # the guess needs no residual
+        if k == 0 and guess is not None:
             at_lo, at_hi = guess
             at_hi = at_hi & ~fixed
             at_lo = (at_lo | fixed) & ~at_hi
-        elif r <= rounds:
-            trial = x - g / d
+        elif k <= rounds:
+            trial = x - r / d
             at_hi = (trial >= hi) & ~fixed
             at_lo = ((trial <= lo) | fixed) & ~at_hi
         else:
-            # the full rounds cycle (P is not an M-matrix): change only the worst violation, a
+            # the full rounds cycle (H is not an M-matrix): change only the worst violation, a
             # free variable beyond a bound (scaled by d to gradient units) or a held one whose
             # multiplier has the wrong sign
             at_lo, at_hi = before[0].copy(), before[1].copy()
             free = ~(at_lo | at_hi)
             # each violation in units of its own certificate tolerance (box_certificate)
-            tol_p, tol_d = _box_tolerances(x, g, free, eps_abs, eps_rel)
+            tol_p, tol_d = _box_tolerances(x, r, free, eps_abs, eps_rel)
             violation = np.concatenate([np.where(free, lo - x, 0.0) / tol_p, np.where(free, x - hi, 0.0) / tol_p,
-                                        -g * (at_lo & ~fixed) / tol_d, g * at_hi / tol_d])
+                                        -r * (at_lo & ~fixed) / tol_d, r * at_hi / tol_d])
             worst = int(np.argmax(violation))
             if violation[worst] > 1.0:
                 i, kind = worst % len(x), worst // len(x)
@@ -96,43 +96,43 @@ def solve_box(P, q, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = RO
         free = ~(at_lo | at_hi)
         if free.any():
             x[free] = 0.0
-            # P_FF x_F = -(q_F + P_FW x_W): LAPACK's Cholesky solve (posv)
-            P_F = P[free]
-            _, x_F, info = _posv(P_F[:, free], -(q[free] + P_F @ x), lower=True)
+            # H_FF x_F = -(c_F + H_FW x_W): LAPACK's Cholesky solve (posv)
+            H_F = H[free]
+            _, x_F, info = _posv(H_F[:, free], -(c[free] + H_F @ x), lower=True)
             if info != 0:
                 return None
             x[free] = x_F
     else:
         return None  # the held set still changes: leave it to OSQP
-    if not box_certificate(P, q, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, g):
+    if not box_certificate(H, c, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, r):
         return None
-    return x, at_lo, at_hi, g
+    return x, at_lo, at_hi, r
 
 
-def box_certificate(P, q, lo, hi, x, at_lo, at_hi, eps_abs: float, eps_rel: float, g=None) -> bool:
+def box_certificate(H, c, lo, hi, x, at_lo, at_hi, eps_abs: float, eps_rel: float, r=None) -> bool:
     """True if x, with the variables in at_lo/at_hi held at lo/hi, is the minimiser of
-    1/2 x^T P x + q^T x over lo <= x <= hi: the checks of the module docstring for the box form.
+    1/2 x^T H x + c^T x over lo <= x <= hi: the checks of the module docstring for the box form.
 
-    Helper: primal feasibility, the multipliers' signs (g = P x + q >= 0 where held at lo, <= 0
-    where held at hi, either where lo = hi) and stationarity (g = 0 where free), each within
+    Helper: primal feasibility, the multipliers' signs (r = H x + c >= 0 where held at lo, <= 0
+    where held at hi, either where lo = hi) and stationarity (r = 0 where free), each within
     OSQP's tolerance eps_abs + eps_rel * scale.
     """
-    g = P @ x + q if g is None else g
+    r = H @ x + c if r is None else r
     fixed = lo == hi
     free = ~(at_lo | at_hi)
-    abs_g = np.abs(g)
-    tol_p, tol_d = _box_tolerances(x, g, free, eps_abs, eps_rel)
+    abs_g = np.abs(r)
+    tol_p, tol_d = _box_tolerances(x, r, free, eps_abs, eps_rel)
     # held variables sit on a bound, so the largest violation over all variables is the free ones'
     if max(float((lo - x).max()), float((x - hi).max())) > tol_p:
         return False
     sign = at_hi.astype(float) - (at_lo & ~fixed)
-    if float((g * sign).max()) > tol_d:
+    if float((r * sign).max()) > tol_d:
         return False
-    scale = max(float(np.abs(g - q).max()), float(np.abs(q).max()))
+    scale = max(float(np.abs(r - c).max()), float(np.abs(c).max()))
     return bool(np.isfinite(x).all() and float((abs_g * free).max()) <= eps_abs + eps_rel * scale)
 
 
-def _box_tolerances(x, g, free, eps_abs: float, eps_rel: float) -> tuple[float, float]:
+def _box_tolerances(x, r, free, eps_abs: float, eps_rel: float) -> tuple[float, float]:
     """OSQP's tolerances eps_abs + eps_rel * scale for the bounds (scale max |x|) and for the
-    multipliers (scale max |g| over the held variables)."""
-    return (eps_abs + eps_rel * float(np.abs(x).max()), eps_abs + eps_rel * float(np.abs(g * ~free).max()))
+    multipliers (scale max |r| over the held variables)."""
+    return (eps_abs + eps_rel * float(np.abs(x).max()), eps_abs + eps_rel * float(np.abs(r * ~free).max()))

@@ -71,16 +71,16 @@ class FastStepper:
         s, model, dt, F, P = self.s, self.model, self.s.dt, self.free, self.prescribed
         clock = [time.perf_counter()]
         tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
-        # Steps 1-3: eq. (1), the joints, u_free over the free coordinates
+        # Steps 1-3: eq. (1), the joints, qd_free over the free coordinates
         terms = self.chain.terms(q, qd)
         M, h = terms.M, terms.h
-        u_next = qd.copy()
+        qd_next = qd.copy()
         if s.servo == "prescribed":
-            u_next[self.joints.v] = (_reference(reference, t + dt)[0] - q[self.joints.q]) / dt
+            qd_next[self.joints.v] = (_reference(reference, t + dt)[0] - q[self.joints.q]) / dt
         M_F = M[F]
         L = _cholesky(M_F[:, F])
-        rhs = dt * (tau_ext - h)[F] - M_F[:, P] @ (u_next[P] - qd[P])
-        u_next[F] = qd[F] + _potrs(L, rhs, lower=1)[0]
+        rhs = dt * (tau_ext - h)[F] - M_F[:, P] @ (qd_next[P] - qd[P])
+        qd_next[F] = qd[F] + _potrs(L, rhs, lower=1)[0]
         clock.append(time.perf_counter())
         # Steps 4-5: contacts, J_c, the rows J over F, G = B^T B with B = L^-1 J_F^T
         contacts = find_contacts(model, terms, s.margin)
@@ -89,37 +89,37 @@ class FastStepper:
         B = _trtrs(L, J[:, F].T, lower=1)[0]
         Minv_JT = _trtrs(L, B, lower=1, trans=1)[0]
         G = B.T @ B
-        problem = least_action_problem(model, G, J @ u_next, contacts, q, t, reference, s)
+        problem = least_action_problem(model, G, J @ qd_next, contacts, q, t, reference, s)
         clock.append(time.perf_counter())
         # Step 6: eq. (6)
         self.qp.new_step()
         x, info = solve_least_action(problem, warm_start(contacts, self.memory, len(problem.c)), self.qp)
         clock.append(time.perf_counter())
         # Step 7: velocity, torques, energy ledger, position
-        u_next[F] += Minv_JT @ x
+        qd_next[F] += Minv_JT @ x
         p = x[:3 * contacts.m]
         if s.servo == "prescribed":
-            tau = (M @ (u_next - qd) / dt + h - J_c.T @ p / dt - tau_ext)[self.joints.v]
+            tau = (M @ (qd_next - qd) / dt + h - J_c.T @ p / dt - tau_ext)[self.joints.v]
         else:
             tau = x[3 * contacts.m:] / dt
         self.memory = warm_start_memory(contacts, x)
         potential = float(-self.chain.mass @ (terms.com @ model.gravity))
-        result = StepResult(self._integrate(q, u_next), u_next, tau, contacts, p, J_c @ u_next, info,
+        result = StepResult(self._integrate(q, qd_next), qd_next, tau, contacts, p, J_c @ qd_next, info,
                             kkt_residuals(problem, x), approach_speed(J_c, qd), np.diag(G)[:3 * contacts.m:3],
-                            *energies(model, qd, u_next, M, contacts, J_c, p, tau, potential, s), self.memory)
+                            *energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential, s), self.memory)
         clock.append(time.perf_counter())
         for phase, t0, t1 in zip(PHASES, clock[:-1], clock[1:]):
             self.timing[phase] += t1 - t0
         return result
 
-    def _integrate(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """q (+) dt u: :func:`cobra_ref.kinematics.integrate` with the revolute joints in one vector operation."""
+    def _integrate(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """q (+) dt qd: :func:`cobra_ref.kinematics.integrate` with the revolute joints in one vector operation."""
         dt, chain = self.s.dt, self.chain
         q_next = q.copy()
-        q_next[chain.rev_q] += dt * u[chain.rev_v]
+        q_next[chain.rev_q] += dt * qd[chain.rev_v]
         for _, iq, iv in chain.free:
-            q_next[iq:iq + 3] += dt * u[iv:iv + 3]
-            quat = quat_mul(q[iq + 3:iq + 7], quat_exp(dt * u[iv + 3:iv + 6]))
+            q_next[iq:iq + 3] += dt * qd[iv:iv + 3]
+            quat = quat_mul(q[iq + 3:iq + 7], quat_exp(dt * qd[iv + 3:iv + 6]))
             q_next[iq + 3:iq + 7] = quat / np.linalg.norm(quat)
         return q_next
 

@@ -15,7 +15,7 @@ from .problem import FAILED_COST, ShootingProblem, rollout
 def shooting_cost(problem: ShootingProblem, traj: Trajectory) -> dict:
     """The cost J of a rollout and its terms (module docstring).
 
-    Implements: DESIGN.md sec. 5 cost, [COBRA] Eq. (6) constraints (2), (3) as exact penalties::
+    Implements: the shooting cost (assumption A17), [COBRA] eq. (6) constraints (2), (3) as exact penalties::
 
         J = w_e E + w_g (d_T / d_0)^2 + w_tau P_tau + w_q P_q
     """

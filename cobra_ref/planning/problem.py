@@ -31,7 +31,7 @@ Decision vectors (``DECISION``; phase phi_0 and the ramp are fixed, see below):
     J, J-mirror:   amplitude, frequency, s_J [0.3, 0.8]   (the hook's length; the side is the gait)
     sidewinding:   amplitude_yaw, amplitude_pitch [0.4, 0.8] rad, frequency [0.3, 0.7] Hz
 
-The initial guess is the gait's default (notes C10), with phi_0 = 0 (the planar start shape).
+The initial guess is the gait's default (assumption A10), with phi_0 = 0 (the planar start shape).
 Left out on purpose: the rolling phase phi_0 (a nonzero phi_0 starts from a twisted shape that
 ``initial_state`` turns onto its flattest side, so it mostly starts the same roll at another point
 of the cycle; not measured), sidewinding's spatial frequency and delta (they change the shape and

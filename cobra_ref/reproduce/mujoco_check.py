@@ -1,6 +1,6 @@
 """MuJoCo rollouts of the exported model: does MuJoCo push the box the same way we do?
 
-Implements: the rollout cross-check of the design brief, sec. 7 ("a gait rollout in MuJoCo moves
+Implements: the rollout cross-check with MuJoCo ("a gait rollout in MuJoCo moves
 the box the same way within a stated tolerance band"), on the MJCF of :func:`cobra_ref.mjcf.to_mjcf`.
 [MJ] = MuJoCo documentation, "Computation" (soft constraints, eq. aref) and "XML Reference"
 (actuator/position, equality/joint), as shipped with mujoco 4.0 in ``mujoco/doc``.
@@ -36,7 +36,7 @@ Two ways to drive the 11 joints (``mode``):
   gainprm = kp, biasprm = (0, -kp, -kv)). With ctrl = theta_ref + (kv / kp) theta_dot_ref this is
   kp (theta_ref - theta) + kv (theta_dot_ref - theta_dot), our PD law with the velocity target,
   with one actuator per joint. Gains default to ``to_mjcf``'s (kp = 100 N m / rad, kv = 2 N m s / rad,
-  = StepSettings.kp / kd, notes C7); with them the C roll lags the reference by up to 0.05 rad.
+  = StepSettings.kp / kd, assumption A7); with them the C roll lags the reference by up to 0.05 rad.
 
 The comparison (``compare``) states its tolerance band and why; ``cross_check`` runs the gaits.
 mujoco is an optional dependency (the ``test`` extra): without it, ``rollout`` and
@@ -155,7 +155,7 @@ def rollout(model: Model, reference, q0, duration: float, dt: float = 1e-3, mode
     """Roll the exported model out in MuJoCo for ``duration`` seconds with the joints driven by
     ``reference(t) -> (q_ref, qd_ref, qdd_ref)`` (11 joints) from the state (``q0``, ``qd0`` = 0).
 
-    Implements: design brief sec. 7, the MuJoCo rollout; the servos of the module docstring.
+    Implements: the MuJoCo rollout; the servos of the module docstring.
 
     Notes
     -----
@@ -234,7 +234,7 @@ def compare(ours_displacement, mujoco_displacement, max_angle_deg: float = MAX_A
             max_ratio: float = MAX_RATIO, min_displacement: float = MIN_DISPLACEMENT) -> dict:
     """Do two horizontal box displacements agree within the stated band?
 
-    Implements: the tolerance band of design brief sec. 7 ("compare bands, not equality").
+    Implements: the tolerance band of the MuJoCo cross-check (compare bands, not equality).
 
     Returns ``angle_deg`` (between the two directions; nan if either is zero), ``ratio``
     (|mujoco| / |ours|), ``ours_norm`` and ``mujoco_norm`` [m], ``holds`` and ``reason``, and the
@@ -287,7 +287,7 @@ def cross_check(gait_names, duration: float, dt: float = 1e-3, ours: dict | None
     """For each gait: its MuJoCo rollout from our initial state, and ``compare`` against our box
     displacement ``ours[gait] = (dx, dy)`` when the caller supplies it.
 
-    Implements: design brief sec. 7, the gait-by-gait MuJoCo cross-check.
+    Implements: the gait-by-gait MuJoCo cross-check.
 
     The reference is ``gaits.gait(name, **params[name])`` (the defaults without ``params``); the initial state is
     ``simulate.initial_state(model, reference, box_direction=...)`` with ``box_directions[name]``

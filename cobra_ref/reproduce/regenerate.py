@@ -64,7 +64,7 @@ def specs_for(gaits=PAPER_GAITS, quick: bool = False, dt: float = 1e-3, params: 
 
 
 OPTIMIZED_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "optimized")
-# the direction-control optimizations (issue 5): goal (dx, dy) relative to the box's start, and the gait
+# the direction-control optimizations: goal (dx, dy) relative to the box's start, and the gait
 DIRECTIONS = {"ahead": ("J", (0.3, 0.0)), "left": ("J-mirror", (0.25, 0.15)), "right": ("C", (0.2, -0.15))}
 
 
@@ -134,9 +134,9 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
         params = optimized_params(files_opt)
         if params:
             _say(progress, f"optimized parameters for {', '.join(params)} (from {optimized_dir}); "
-                           f"defaults (notes C10) for any other gait")
+                           f"defaults (assumption A10) for any other gait")
         else:
-            _say(progress, "default gait parameters (notes C10) for every gait")
+            _say(progress, "default gait parameters (assumption A10) for every gait")
     specs = specs_for(gaits, quick, params=params)
     _say(progress, f"simulating {len(specs)} gaits x {specs[0].duration:g} s (cache: {cache_dir})")
     results = run_all(specs, cache_dir, force=force, workers=workers, progress=progress)
@@ -164,9 +164,9 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
     summaries = claims_mod.gait_summaries(results)
     report = claims_mod.paper_claims(summaries)
     settings = {"duration (s)": specs[0].duration, "dt (s)": specs[0].dt, "quick": quick,
-                "optimized parameters from": {g: _shown(files_opt[g]) if g in files_opt else "defaults (notes C10)"
+                "optimized parameters from": {g: _shown(files_opt[g]) if g in files_opt else "defaults (assumption A10)"
                                               for g in gaits}
-                if params else "defaults (notes C10)",
+                if params else "defaults (assumption A10)",
                 "gait parameters": {g: r.meta.get("gait_params") for g, r in results.items()},
                 "box direction (sidewinding)": results["sidewinding"].meta.get("box_direction")
                 if "sidewinding" in results else None}
@@ -182,7 +182,7 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
 
 
 def _mujoco_rows(results, out_dir, progress, files) -> list[dict]:
-    """The MuJoCo rollout cross-check (design brief sec. 7) as claims, and its figure; empty, with
+    """The MuJoCo rollout cross-check as claims, and its figure; empty, with
     a note on stderr, when mujoco is not installed (it is an optional extra)."""
     from . import claims as claims_mod
     from .mujoco_check import cross_check, mujoco_available

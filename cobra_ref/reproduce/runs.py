@@ -50,7 +50,7 @@ PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
 
 @dataclass(frozen=True)
 class RunSpec:
-    """One gait run: the gait, its parameters (empty = the defaults of notes C10), and the settings."""
+    """One gait run: the gait, its parameters (empty = the defaults of assumption A10), and the settings."""
 
     gait: str
     duration: float = 10.0

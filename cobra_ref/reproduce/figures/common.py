@@ -1,6 +1,6 @@
 """Shared helpers of the paper-figure scripts: style, gait order and colours, saving, ``main``.
 
-Helper: no physics here (STYLE.md C7). Every figure module has
+Helper: no physics here. Every figure module has
 ``make(results, out_dir, model) -> list[str]`` and ends with ``common.main(make)``, so that
 ``python -m cobra_ref.figures.fig07_power --out figures`` runs the quick simulations through
 ``reproduce.run_all`` (cached) and writes that one figure.
@@ -45,7 +45,7 @@ def paper_style(make):
     """Decorator: run a figure's ``make`` under the paper's rcParams (``STYLE``), leaving the
     caller's matplotlib settings untouched.
 
-    Helper: shared figure style (STYLE.md C7).
+    Helper: shared figure style.
     """
     @functools.wraps(make)
     def styled(*args, **kwargs):

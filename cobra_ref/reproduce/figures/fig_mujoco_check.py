@@ -1,6 +1,6 @@
 """The MuJoCo rollout cross-check as a picture: each gait's box displacement, ours and MuJoCo's.
 
-Helper: the figure of the design brief's sec. 7 cross-check (``mujoco_rollout.cross_check``):
+Helper: the figure of the MuJoCo cross-check (``mujoco_rollout.cross_check``):
 one arrow per simulator and gait from the box's start, in the robot's start frame (head at the
 origin facing +x), with the angle between the two and the ratio of their lengths; the caption
 states the tolerance band (``mujoco_rollout.compare``).

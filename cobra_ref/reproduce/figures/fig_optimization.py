@@ -1,6 +1,6 @@
 """The single-shooting optimizations as pictures: cost histories and the box's path to each goal.
 
-Helper: the figures of issue 5 (DESIGN.md sec. 5). ``make`` draws, for a set of optimized runs
+Helper: the figures of the single-shooting optimizations (assumption A17). ``make`` draws, for a set of optimized runs
 (one params JSON of ``cobra-ref optimize`` each, replayed to get the box's path):
 
 * left: the cost of every rollout in evaluation order (dots) and the best so far (line), per run;
