@@ -9,7 +9,41 @@ from __future__ import annotations
 
 import os
 import signal
+from contextlib import contextmanager
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
+
+
+def _openblas_libraries() -> list:
+    """(path, set_num_threads, get_num_threads) of every OpenBLAS loaded in this process (Linux).
+
+    Helper: numpy's and scipy's bundled OpenBLAS, found in /proc/self/maps; elsewhere, or without
+    OpenBLAS, [].
+    """
+    import ctypes
+    import re
+
+    import numpy  # noqa: F401  (loads numpy's OpenBLAS, so that it is found below)
+    import scipy.linalg  # noqa: F401  (and scipy's)
+
+    try:
+        with open("/proc/self/maps") as f:
+            paths = sorted(set(re.findall(r"(/\S*openblas\S*\.so\S*)", f.read())))
+    except OSError:
+        return []
+    found = []
+    for path in paths:
+        lib = ctypes.CDLL(path)
+        for prefix in ("scipy_openblas", "openblas"):
+            for suffix in ("64_", ""):
+                setter = getattr(lib, f"{prefix}_set_num_threads{suffix}", None)
+                getter = getattr(lib, f"{prefix}_get_num_threads{suffix}", None)
+                if setter is not None and getter is not None:
+                    found.append((path, setter, getter))
+                    break
+            else:
+                continue
+            break
+    return found
 
 
 def limit_blas_threads(n: int = 1) -> list[str]:
@@ -17,29 +51,35 @@ def limit_blas_threads(n: int = 1) -> list[str]:
 
     Helper: a contact step works on 23 x 23 matrices, where OpenBLAS's threads cost far more than
     they save, above all on a shared machine (measured on the 2-core machine with other jobs
-    running: a 0.4 s rollout took 9.1 s with OpenBLAS's default threads and 2.1 s with one, with
-    bit-identical results). Finds numpy's and scipy's bundled OpenBLAS in /proc/self/maps (Linux;
-    elsewhere, or without OpenBLAS, it does nothing and returns []).
+    running: a 2 s rollout took 17.0 ms per step with OpenBLAS's default threads and 4.6 ms with
+    one, with bit-identical results).
     """
     import ctypes
-    import re
 
+    libraries = _openblas_libraries()
+    for _, setter, _ in libraries:
+        setter(ctypes.c_int(n))
+    return [path for path, _, _ in libraries]
+
+
+@contextmanager
+def one_blas_thread():
+    """Run the ``with`` block with one OpenBLAS thread, then restore each library's thread count.
+
+    Helper: used by ``simulate`` so that a script calling it directly runs as fast as the command
+    line (which limits the threads once for the whole process).
+    """
+    import ctypes
+
+    libraries = _openblas_libraries()
+    before = [getter() for _, _, getter in libraries]
+    for _, setter, _ in libraries:
+        setter(ctypes.c_int(1))
     try:
-        with open("/proc/self/maps") as f:
-            paths = sorted(set(re.findall(r"(/\S*openblas\S*\.so\S*)", f.read())))
-    except OSError:
-        return []
-    done = []
-    for path in paths:
-        lib = ctypes.CDLL(path)
-        for symbol in ("scipy_openblas_set_num_threads64_", "scipy_openblas_set_num_threads",
-                       "openblas_set_num_threads64_", "openblas_set_num_threads"):
-            setter = getattr(lib, symbol, None)
-            if setter is not None:
-                setter(ctypes.c_int(n))
-                done.append(path)
-                break
-    return done
+        yield
+    finally:
+        for (_, setter, _), n in zip(libraries, before):
+            setter(ctypes.c_int(n))
 
 
 def worker_init() -> None:

@@ -45,7 +45,12 @@ def to_mjcf(model: Model, timestep: float = 1e-3, kp: float = 100.0, kv: float =
 
     Helper: the MuJoCo cross-check's model ([MJ] XML reference). Position actuators (gains ``kp``,
     ``kv``, force range +-tau_limit) drive every revolute joint; assumption A7 gives the range.
+    ``timestep`` [s] must be finite and within the rule ``validation.RULES["timestep"]`` (at most
+    half the contact time constant of 4 ms); a ``ValidationError`` names the value otherwise.
     """
+    from .validation import RULES
+
+    timestep = RULES["timestep"].check(timestep, "timestep")
     root = ET.Element("mujoco", model=model.name)
     root.append(ET.Comment(" written by cobra_ref.mjcf.to_mjcf; q/qd order identical to cobra_ref "))
     ET.SubElement(root, "compiler", angle="radian", autolimits="true", inertiafromgeom="false")

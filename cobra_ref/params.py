@@ -63,6 +63,14 @@ class CobraParameters:
     contact_damping: float = 1e3
     stiction_velocity: float = 1e-3
 
+    def __post_init__(self):
+        """Check every field by its rule (:mod:`cobra_ref.validation`: finite, in range, in its
+        unit; inertias positive and within the triangle inequality); a ``ValidationError`` (a
+        ValueError) names the field, the value and the allowed range."""
+        from .validation import check_parameters
+
+        check_parameters(self)
+
     @property
     def total_length(self) -> float:
         """Head + 10 links + tail + 11 joint gaps (derived, A2): 1.695 m."""

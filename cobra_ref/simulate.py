@@ -15,12 +15,14 @@ from dataclasses import asdict
 import numpy as np
 
 from .contact import KINDS, find_contacts
+from .executors import one_blas_thread
 from .fast.stepper import FastStepper
 from .model import Model
 from .qp import ContactSolveError
 from .start import initial_state
 from .step import SimulationError, StepSettings, joint_coordinates, step
 from .trajectory import CONTACT_KEYS, STEP_KEYS, Trajectory
+from .validation import ValidationError, time_grid
 
 STEPPERS = ("fast", "reference")
 IMPACT_SPEED = 0.01  # [m/s] a contact that starts carrying load while approaching faster is an impact (A26)
@@ -31,12 +33,19 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
              qd0=None, progress=None, box_offset=None, box_direction=None, stepper: str = "fast") -> Trajectory:
     """Simulate ``duration`` seconds from (q0, qd0) (default: ``start.initial_state``); return a Trajectory.
 
-    Implements: the time stepping of [COBRA] (module docstring). Raises ``SimulationError`` for
-    a bad duration or stepper, a start in deep penetration, or a failure mid-run; the failure
-    names the step and time, and its ``trajectory`` attribute keeps everything computed before it.
+    Implements: the time stepping of [COBRA] (module docstring). The time grid is checked before
+    anything is allocated (``validation.time_grid``): ``settings.dt`` within the stable range,
+    ``round(duration / dt)`` steps, at least one and at most ``validation.MAX_STEPS`` (the
+    command line also asks for a whole number of steps). Raises ``SimulationError`` for a bad
+    duration or stepper, a start in deep penetration, or a failure mid-run; a failure mid-run,
+    of any exception type, names the step and time, and its ``trajectory`` attribute keeps
+    everything computed before it (the original exception is its ``__cause__``). Ctrl-C
+    (``KeyboardInterrupt``) is re-raised as it is, with the same ``trajectory`` attribute.
     """
-    if not (np.isfinite(duration) and duration > 0):
-        raise SimulationError(f"duration must be positive and finite, got {duration}")
+    try:
+        n_steps = time_grid(duration, settings.dt, exact=False)
+    except ValidationError as exc:
+        raise SimulationError(str(exc)) from None
     if stepper not in STEPPERS:
         raise SimulationError(f"stepper must be one of {', '.join(STEPPERS)}, got {stepper!r}")
     if q0 is None:
@@ -44,27 +53,44 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
     q, qd = model.check_q(q0).copy(), model.check_qd(np.zeros(model.nv) if qd0 is None else qd0).copy()
     _check_start(model, q)
     advance = _stepper(model, settings, stepper)
-    n_steps = int(round(duration / settings.dt))
     log = _Log(model, n_steps, settings.dt)
     log.add_state(0.0, q, qd)
-    start = time.perf_counter()
-    for k in range(n_steps):
-        t = k * settings.dt
-        try:
-            res = advance(q, qd, t, reference)
-        except (ContactSolveError, np.linalg.LinAlgError, SimulationError, ValueError, FloatingPointError) as exc:
-            traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): {exc}", meta(model, settings, advance))
-            raise SimulationError(f"step failed at step {k}, t = {t:.4f} s: {exc}", traj) from exc
-        q, qd = res.q, res.qd
-        if not math.isfinite(q.sum() + qd.sum()):  # a NaN or inf anywhere makes the sum non-finite
-            traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): non-finite state",
-                              meta(model, settings, advance))
-            raise SimulationError(f"non-finite state at step {k}, t = {t:.4f} s", traj)
-        log.add_step(k, res, reference(t + settings.dt)[0])
-        log.add_state(t + settings.dt, q, qd)
-        if progress is not None and ((k + 1) % 250 == 0 or k + 1 == n_steps):
-            progress(k + 1, n_steps)
+    # the step's matrices are small: one BLAS thread is fastest (executors.one_blas_thread)
+    with one_blas_thread():
+        start = time.perf_counter()
+        for k in range(n_steps):
+            t = k * settings.dt
+            try:
+                res = advance(q, qd, t, reference)
+                q, qd = res.q, res.qd
+                if not math.isfinite(q.sum() + qd.sum()):  # a NaN or inf anywhere makes the sum non-finite
+                    raise _NonFinite(f"non-finite state at step {k}, t = {t:.4f} s")
+                log.add_step(k, res)
+                log.add_state(t + settings.dt, q, qd)
+                if progress is not None and ((k + 1) % 250 == 0 or k + 1 == n_steps):
+                    progress(k + 1, n_steps)
+            except _NonFinite as exc:
+                traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): non-finite state",
+                                  meta(model, settings, advance))
+                raise SimulationError(str(exc), traj) from None
+            except KeyboardInterrupt as exc:
+                exc.trajectory = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): interrupted",
+                                            meta(model, settings, advance))
+                raise
+            except Exception as exc:  # any failure of the step: keep what was computed, name step and time
+                what = str(exc) if isinstance(exc, EXPECTED) else f"{type(exc).__name__}: {exc}"
+                traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): {what}",
+                                  meta(model, settings, advance))
+                raise SimulationError(f"step failed at step {k}, t = {t:.4f} s: {what}", traj) from exc
     return log.finish(time.perf_counter() - start, "", meta(model, settings, advance))
+
+
+# the failures a step is known to raise (named by their message alone); any other is named with its type
+EXPECTED = (ContactSolveError, np.linalg.LinAlgError, SimulationError, ValueError, FloatingPointError)
+
+
+class _NonFinite(Exception):
+    """A step that left NaN or inf in the state."""
 
 
 def _stepper(model: Model, settings: StepSettings, name: str):
@@ -124,7 +150,7 @@ class _Log:
         i = self.n
         self.t[i], self.q[i], self.qd[i] = t, q, qd
 
-    def add_step(self, k, res, q_ref_next):
+    def add_step(self, k, res):
         s, info, cs, joints = self.steps, res.info, res.contacts, self.joints
         s["fp_converged"][k], s["fp_iter"][k] = info.converged, info.iterations
         s["qp_iter"][k], s["qp_solves"][k] = info.qp_iterations, info.qp_solves
@@ -136,7 +162,7 @@ class _Log:
             s["tau_excess"][k] = float((np.abs(res.tau) - joints.tau_max).max())
             s["q_excess"][k] = float((np.abs(res.q[joints.q]) - joints.q_max).max())
             s["qd_excess"][k] = float((np.abs(res.qd[joints.v]) - joints.qd_max).max())
-            s["tracking_error"][k] = float(np.abs(res.q[joints.q] - q_ref_next).max())
+            s["tracking_error"][k] = float(np.abs(res.q[joints.q] - res.q_ref).max())
         else:
             s["tau_excess"][k] = s["q_excess"][k] = s["qd_excess"][k] = -np.inf
         for key in ("kinetic", "potential", "elastic", "work_actuators", "work_contacts"):

@@ -26,14 +26,15 @@ SETTLE_SPEED = 1e-2  # [m/s, rad/s] until no coordinate moves faster (below the 
 
 
 def initial_state(model: Model, reference, settings: StepSettings = StepSettings(), box_offset=None,
-                  box_gap: float = 0.05, box_direction=None, settle: bool = True):
+                  box_gap: float = 0.05, box_direction=None, settle: bool = True, box_yaw=None):
     """(q0, qd0): the scene placed (``placed_state``) and, with ``settle``, settled (module docstring).
 
     Implements: the start at rest (assumption A25): the joints hold the reference's t = 0
     shape while the robot and the box come to rest on the ground under ``settings``' contact
     law and servo; what is left of their motion (below SETTLE_SPEED) is returned as qd0.
+    ``box_offset``, ``box_gap``, ``box_direction`` and ``box_yaw``: see ``placed_state``.
     """
-    q = placed_state(model, reference, box_offset, box_gap, box_direction=box_direction)
+    q = placed_state(model, reference, box_offset, box_gap, box_direction=box_direction, box_yaw=box_yaw)
     qd = np.zeros(model.nv)
     if settle:
         from .fast.stepper import FastStepper
@@ -61,19 +62,32 @@ class _Hold:
 
 
 def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05, clearance: float = 0.0,
-                 box_direction=None) -> np.ndarray:
+                 box_direction=None, box_yaw=None) -> np.ndarray:
     """q of the robot in the reference's t = 0 shape, head at the origin facing +x, lowest sphere
     ``clearance`` above the ground (default: touching it); the box flat on the ground beside the middle of the snake
     (assumption A9). ``initial_state`` lets this settle.
 
-    Box placement: the middle of the snake is the midpoint of the two middle bodies' centres of
-    mass (L5 and L6 for COBRA), and the concave side is the horizontal direction d from there
-    to the robot's centre of mass. The box's centre goes to middle + (r + a/2 + box_gap) d,
-    turned so that one face looks back at the robot: ``box_gap`` (default 0.05 m, A9) is then
-    the clearance between that face and the middle link's cylinder. ``box_offset`` = (dx, dy)
-    instead puts the box centre at middle + (dx, dy), axis-aligned; ``box_direction`` = (dx, dy)
-    replaces the concave side d by that horizontal direction (sidewinding pushes with its
-    leading side: ``reproduce`` passes the direction the gait travels).
+    Box placement. The middle of the snake is the midpoint m of the two middle bodies' centres of
+    mass (L5 and L6 for COBRA); its heading h is the horizontal direction from the second to the
+    first, and its left side n is h turned by +90 degrees about the vertical. The box goes in the
+    horizontal direction d from m, its centre at m + (r + a/2 + box_gap) d (r: the middle link's
+    radius, a: the box's edge), turned so that one face looks back at the robot: ``box_gap``
+    (default 0.05 m, A9) is then the clearance between that face and the middle link's cylinder.
+    The direction d is, in this order:
+
+    * ``box_direction`` = (dx, dy) if given (sidewinding pushes with its leading side:
+      ``reproduce`` passes the direction the gait travels);
+    * the concave side: from m to the robot's centre of mass c, when the start is bent, that is
+      when c lies at least ``STRAIGHT_TOLERANCE`` (1 mm) to the side of the middle's axis
+      (|(c - m) . n| >= 1 mm) and no more along the axis than across it (within 45 degrees of
+      the side; farther along, the box would land on the robot's own links);
+    * otherwise (a straight or nearly straight start, or a symmetric S) the side: n if the
+      centre of mass is on the left or on the axis, -n if it is on the right by 1 mm or more. A
+      straight start's box then sits beside the middle link on the body's left, clear of it.
+
+    ``box_offset`` = (dx, dy) [m] instead puts the box centre at m + (dx, dy) (world axes),
+    axis-aligned; ``box_yaw`` [rad] turns the box about the vertical to that heading (world
+    axes; by default the placement's own: facing the robot, or 0 with ``box_offset``).
 
     The robot's base is first turned so that its start shape lies on its flattest side
     (``_rest_on_flattest_side``; no turn for the planar rolling shapes).
@@ -96,21 +110,44 @@ def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05
         middle = com[mid_bodies].mean(axis=0)
         iq = model.q_idx[box.body]
         if box_offset is not None:
-            centre, yaw = middle[:2] + np.asarray(box_offset, dtype=float), 0.0
+            offset = np.asarray(box_offset, dtype=float).reshape(-1)
+            if offset.shape != (2,) or not np.all(np.isfinite(offset)):
+                raise ValueError(f"box_offset must be two finite numbers (dx, dy) in metres, got {box_offset}")
+            centre, yaw = middle[:2] + offset, 0.0
         else:
-            d = (np.average(com, axis=0, weights=[model.mass[i] for i in robot]) - middle)[:2]
             if box_direction is not None:
                 d = np.asarray(box_direction, dtype=float)[:2]
                 if not (np.all(np.isfinite(d)) and np.linalg.norm(d) > 0):
                     raise ValueError(f"box_direction must be a finite non-zero (dx, dy), got {box_direction}")
-            elif np.linalg.norm(d) < 1e-3:  # a straight or symmetric S shape: use the body's left side
-                d = kin.R[mid_bodies[0]][:2, 1]
+            else:
+                d = _concave_side(com, mid_bodies, [model.mass[i] for i in robot])
             d = d / np.linalg.norm(d)
             r = max(sph.radius[np.isin(sph.body, mid_bodies)])
             centre, yaw = middle[:2] + (r + box.half[0] + box_gap) * d, np.arctan2(d[1], d[0])
+        if box_yaw is not None:
+            yaw = float(box_yaw)
+            if not np.isfinite(yaw):
+                raise ValueError(f"box_yaw must be a finite angle in radians, got {box_yaw}")
         q[iq.start:iq.start + 3] = [centre[0], centre[1], box.half[2]]
         q[iq.start + 3:iq.start + 7] = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
     return q
+
+
+STRAIGHT_TOLERANCE = 1e-3  # [m] a start whose centre of mass is closer to the middle's axis has no concave side
+
+
+def _concave_side(com: np.ndarray, mid_bodies, masses) -> np.ndarray:
+    """The horizontal direction from the middle to the centre of mass, or the middle's side when
+    that direction is not across the body (``placed_state``'s rule)."""
+    middle = com[mid_bodies].mean(axis=0)
+    d = (np.average(com, axis=0, weights=masses) - middle)[:2]
+    h = (com[mid_bodies[0]] - com[mid_bodies[1]])[:2]
+    h = h / np.linalg.norm(h)
+    n = np.array([-h[1], h[0]])
+    across, along = float(d @ n), float(d @ h)
+    if abs(across) >= STRAIGHT_TOLERANCE and abs(along) <= abs(across):
+        return d
+    return -n if across <= -STRAIGHT_TOLERANCE else n
 
 
 def _rest_on_flattest_side(model: Model, q) -> np.ndarray:

@@ -67,14 +67,15 @@ class StepSettings:
     margin: float = 0.01
 
     def __post_init__(self):
-        if not (np.isfinite(self.dt) and self.dt > 0):
-            raise ValueError(f"dt must be positive and finite, got {self.dt}")
-        if self.contact not in LAWS:
-            raise ValueError(f"contact must be one of {', '.join(LAWS)}, got {self.contact!r}")
-        if self.servo not in SERVOS:
-            raise ValueError(f"servo must be one of {', '.join(SERVOS)}, got {self.servo!r}")
-        if not (np.isfinite(self.margin) and self.margin >= 0):
-            raise ValueError(f"margin must be finite and >= 0, got {self.margin}")
+        """Check every setting by its rule (:mod:`cobra_ref.validation`): dt within
+        [DT_MIN, DT_MAX] (A14), a known contact law and servo, a margin in [0, 1] m; a
+        ``ValidationError`` (a ValueError) names the field, the value and the allowed range."""
+        from .validation import RULES, check_choice
+
+        RULES["dt"].check(self.dt, "dt")
+        check_choice("contact", self.contact, LAWS)
+        check_choice("servo", self.servo, SERVOS)
+        RULES["margin"].check(self.margin, "margin")
 
 
 class StepResult(NamedTuple):
@@ -95,6 +96,7 @@ class StepResult(NamedTuple):
     elastic: float  # energy stored in compressed compliant contacts at the start of the step [J]
     work_actuators: float  # dt tau . qd_mid over the joints, qd_mid = (qd + qd+) / 2 [J]
     work_contacts: float  # x_c . J_c qd_mid: work of the contact impulses [J]
+    q_ref: np.ndarray  # (n_joints,) the joints' reference at the end of the step [rad]
     memory: dict  # where the next step's friction fixed point starts (warm_start_memory)
 
 
@@ -108,13 +110,14 @@ def step(model: Model, q, qd, t: float, reference, settings: StepSettings = Step
     """
     dt, joints = settings.dt, joint_coordinates(model)
     tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
+    q_ref, qd_ref, _ = _reference(reference, t + dt)  # the joints' reference at the end of the step
     # Step 1: eq. (1), M(q) and h(q, qd)
     kin = forward_kinematics(model, q)
     M, h = crba(model, q), bias_force(model, q, qd)
     # Step 2: the joints -- free coordinates F; prescribed joints move to their reference
     qd_next = qd.copy()
     if settings.servo == "prescribed":
-        qd_next[joints.v] = (_reference(reference, t + dt)[0] - q[joints.q]) / dt
+        qd_next[joints.v] = (q_ref - q[joints.q]) / dt
         F = np.setdiff1d(np.arange(model.nv), joints.v)
     else:
         F = np.arange(model.nv)
@@ -128,7 +131,7 @@ def step(model: Model, q, qd, t: float, reference, settings: StepSettings = Step
     # Step 5: eq. (5), the rows J over F, the Delassus matrix G and the least-action problem
     J = np.vstack([J_c, _servo_jacobian(model, joints, settings)])
     G, Minv_JT = delassus(J[:, F], M[np.ix_(F, F)])
-    problem = least_action_problem(model, G, J @ qd_next, contacts, q, t, reference, settings)
+    problem = least_action_problem(model, G, J @ qd_next, contacts, q, q_ref, qd_ref, settings, joints)
     # Step 6: eq. (6), the impulses, starting from the previous step's
     x, info = solve_least_action(problem, warm_start(contacts, previous, len(problem.c)))
     # Step 7: the velocity after the step, the joint torques, the position
@@ -140,7 +143,8 @@ def step(model: Model, q, qd, t: float, reference, settings: StepSettings = Step
         tau = x[3 * contacts.m:] / dt
     return StepResult(integrate(model, q, qd_next, dt), qd_next, tau, contacts, p, J_c @ qd_next, info,
                       kkt_residuals(problem, x), approach_speed(J_c, qd), np.diag(G)[:3 * contacts.m:3],
-                      *energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential_energy(model, q), settings),
+                      *energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential_energy(model, q), settings, joints),
+                      q_ref,
                       warm_start_memory(contacts, x))
 
 
@@ -175,13 +179,14 @@ def _servo_jacobian(model: Model, joints: JointCoordinates, settings: StepSettin
     return np.eye(model.nv)[joints.v]
 
 
-def least_action_problem(model: Model, G, c_free, contacts: Contacts, q, t: float, reference,
-                         settings: StepSettings) -> LeastAction:
+def least_action_problem(model: Model, G, c_free, contacts: Contacts, q, q_ref, qd_ref, settings: StepSettings,
+                         joints: JointCoordinates) -> LeastAction:
     """The least-action problem of eq. (6): H = G + R and c = J qd_free + b over the rows.
 
     Implements: [COBRA] eq. (5)-(6) with each row's compliance R and offset b
     (:mod:`cobra_ref.compliance`): contact normals and friction under ``settings.contact``,
-    then the servo rows (position servo), bounded by tau_max dt.
+    then the servo rows (position servo, towards q_ref and qd_ref, the reference at the step's
+    end), bounded by tau_max dt; ``joints``: the model's ``joint_coordinates``.
     """
     m, dt, law = contacts.m, settings.dt, settings.contact
     d = np.diag(G)
@@ -192,8 +197,6 @@ def least_action_problem(model: Model, G, c_free, contacts: Contacts, q, t: floa
     R[2:3 * m:3] = compliance.tangential_compliance(d[2:3 * m:3], law)
     lo = hi = np.zeros(0)
     if settings.servo == "position":
-        joints = joint_coordinates(model)
-        q_ref, qd_ref, _ = _reference(reference, t + dt)
         R[3 * m:], b[3 * m:] = compliance.servo_rows(model, q[joints.q], q_ref, qd_ref, dt)
         lo, hi = -joints.tau_max * dt, joints.tau_max * dt
     mu = np.where(contacts.kind == ROBOT_BOX, model.mu_rb, model.mu)
@@ -241,7 +244,8 @@ def approach_speed(J_c: np.ndarray, qd) -> np.ndarray:
     return np.maximum(-(J_c[0::3] @ qd), 0.0)
 
 
-def energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential: float, settings: StepSettings):
+def energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential: float, settings: StepSettings,
+             joints: JointCoordinates):
     """(kinetic, potential, elastic, work_actuators, work_contacts) of one step (StepResult).
 
     Helper: the energy ledger, at the midpoint velocity qd_mid = (qd + qd+) / 2, for which
@@ -252,7 +256,7 @@ def energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential: float, set
     elastic = 0.0
     if settings.contact == "compliant":
         elastic = float(0.5 * model.contact_stiffness * np.sum(np.minimum(contacts.g, 0.0) ** 2))
-    return (0.5 * float(qd @ M @ qd), potential, elastic, settings.dt * float(tau @ qd_mid[joint_coordinates(model).v]),
+    return (0.5 * float(qd @ M @ qd), potential, elastic, settings.dt * float(tau @ qd_mid[joints.v]),
             float(p @ (J_c @ qd_mid)))
 
 

@@ -26,12 +26,11 @@ arrays of length N hold steps (from t_k to t_k+1):
 from __future__ import annotations
 
 import json
-import os
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .output import atomic_write
+from .output import write_binary
 
 STEP_KEYS = ("fp_converged", "fp_iter", "qp_iter", "qp_solves", "coulomb_residual", "complementarity",
              "cone_residual", "max_penetration", "n_contacts", "tau_excess", "q_excess", "qd_excess",
@@ -95,14 +94,13 @@ class Trajectory:
                        float(z["wall_time"]), str(z["error"]), json.loads(str(z["meta"])))
 
     def to_npz(self, path: str) -> None:
-        """Write every array to an NPZ atomically (temporary file + rename: never half-written).
+        """Write every array to an NPZ under exactly the name ``path`` (nothing appended: ``run``
+        stays ``run``), atomically: a temporary file renamed onto the target, never half-written
+        (:mod:`cobra_ref.output`; ``OutputError`` for a directory, a device or a missing directory).
 
         Helper: ``cobra-ref simulate --out`` and the figure runs' cache.
         """
-        directory = os.path.dirname(os.path.abspath(path)) or "."
-        if not os.path.isdir(directory):
-            raise OSError(f"output directory does not exist: {directory}")
         arrays = dict(t=self.t, q=self.q, qd=self.qd, tau=self.tau, box_pose=self.box_pose, dt=np.array(self.dt),
                       wall_time=np.array(self.wall_time),
                       meta=np.array(json.dumps(self.meta)), error=np.array(self.error), **self.steps, **self.contacts)
-        atomic_write(path, lambda tmp: np.savez_compressed(tmp, **arrays))
+        write_binary(path, lambda f: np.savez_compressed(f, **arrays), "NPZ")

@@ -63,16 +63,19 @@ def test_simulate_writes_the_npz_and_prints_one_json_line(tmp_path, capfd):
         assert summary["max_penetration"] == float(run["max_penetration"].max())
 
 
-def _bad(argv, tmp_path, message):
+def _bad(argv, tmp_path, message, capsys=None):
+    """Bad input: exit with a message naming the problem (argparse's on stderr, status 2, or the
+    command's own, status 1), and nothing written."""
     out = tmp_path / "run.npz"
     with pytest.raises(SystemExit) as err:
         main(["simulate", *argv, "--out", str(out), "--quiet"])
-    assert message in str(err.value)
+    said = str(err.value.code) + (capsys.readouterr().err if capsys is not None else "")
+    assert err.value.code != 0 and message in said
     assert not out.exists() and list(tmp_path.iterdir()) == [], "bad input must write nothing"
 
 
-def test_simulate_unknown_gait_names_it(tmp_path):
-    _bad(["--gait", "slithering"], tmp_path, "unknown gait 'slithering'")
+def test_simulate_unknown_gait_names_it(tmp_path, capsys):
+    _bad(["--gait", "slithering"], tmp_path, "unknown gait 'slithering'", capsys)
 
 
 @pytest.mark.parametrize("content, message", [
@@ -93,14 +96,15 @@ def test_simulate_malformed_reference_file_names_the_problem(tmp_path, content, 
 
 
 @pytest.mark.parametrize("dt", ["0", "-1e-3"])
-def test_simulate_rejects_dt_not_positive(tmp_path, dt):
-    _bad([f"--dt={dt}"], tmp_path, "dt must be positive")
+def test_simulate_rejects_dt_not_positive(tmp_path, dt, capsys):
+    _bad([f"--dt={dt}"], tmp_path, f"--dt = {dt.replace('1e-3', '0.001')} s is out of range (allowed: [1e-5, 0.005] s)",
+         capsys)
 
 
 @pytest.mark.parametrize("duration", ["inf", "nan"])
 def test_simulate_rejects_a_duration_that_is_not_finite(tmp_path, duration, capsys):
     _bad(["--duration", duration], tmp_path, "2")  # argparse exits with status 2 ...
-    assert "must be finite" in capsys.readouterr().err  # ... and names the problem
+    assert f"--duration = {duration} is not finite" in capsys.readouterr().err  # ... and names the problem
 
 
 def test_simulate_into_a_missing_directory_fails_before_running(tmp_path):

@@ -323,7 +323,8 @@ joints = joint_coordinates(model)
 J = np.vstack([J_c, np.eye(model.nv)[joints.v]])
 G, Minv_JT = delassus(J, M)
 print(f"J: {J.shape}, G: {G.shape}, rank G = {np.linalg.matrix_rank(G)}")
-problem = least_action_problem(model, G, J @ u_free, contacts, q, 0.0, ref, settings)
+q_ref, qd_ref, _ = ref(dt)  # the joints' reference at the end of the step
+problem = least_action_problem(model, G, J @ u_free, contacts, q, q_ref, qd_ref, settings, joints)
 R_rows, b_rows = np.diag(problem.H - G), problem.c - J @ u_free
 
 # %% [markdown]
@@ -335,7 +336,6 @@ R_rows, b_rows = np.diag(problem.H - G), problem.c - J @ u_free
 
 # %%
 R_N_hand, b_N_hand = 1 / (dt * (k * dt + d)), k * contacts.g / (k * dt + d)
-q_ref, qd_ref, _ = ref(dt)
 kp, kd = model.servo_kp, model.servo_kd
 R_s_hand, b_s_hand = 1 / (dt * (kp * dt + kd)), (kp * (q[joints.q] - q_ref) - kd * qd_ref) / (kp * dt + kd)
 n_c = 3 * contacts.m

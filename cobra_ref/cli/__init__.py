@@ -11,7 +11,7 @@ import argparse
 from ..executors import limit_blas_threads
 from . import bench, figures, info, optimize, simulate, view
 
-SUBCOMMANDS = (info, simulate, optimize, figures, bench, view)
+SUBCOMMANDS = (info, simulate, optimize, figures, view, bench)
 
 
 def build_parser() -> argparse.ArgumentParser:

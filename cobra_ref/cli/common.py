@@ -1,7 +1,12 @@
 """What every ``cobra-ref`` subcommand shares: argument types, output checks, quiet C libraries.
 
-Helper: conventions of the command line. Every input is checked before the long run; progress
-and summaries go to stderr, stdout carries one JSON line; files are written atomically.
+Helper: conventions of the command line. Every input is checked before the long run, by the
+rules of :mod:`cobra_ref.validation` (an option's ``type=``, or ``fail`` with the rule's
+message: exit status 2 for a malformed option, 1 for input refused after parsing, never a
+traceback); every output by :func:`cobra_ref.output.check_output` (exact name, regular files
+only, a real write probe). Progress and summaries go to stderr, stdout carries one JSON line;
+files are written atomically. A run that fails part-way keeps what was computed in
+``OUT.failed.npz`` (``OUT`` without its extension), named in the error message.
 """
 
 from __future__ import annotations
@@ -14,18 +19,50 @@ import sys
 
 import numpy as np
 
+from ..output import OutputError, check_output
 from ..progress import progress_printer
 
 
-def write_text_atomic(path: str, text: str) -> None:
-    """Check the directory (a clear error), then write through a temporary file and a rename.
+def fail(message) -> SystemExit:
+    """The ``SystemExit`` that prints ``error: MESSAGE`` and exits with status 1 (raise it).
+
+    Helper: shared by every cobra-ref subcommand.
+    """
+    return SystemExit(f"error: {message}")
+
+
+def check_out(path, what: str = "--out") -> str:
+    """``output.check_output`` for a command: the checked path, or exit with the reason.
+
+    Helper: shared by every cobra-ref subcommand (before the long run).
+    """
+    try:
+        check_output(path, what)
+    except OutputError as exc:
+        raise fail(exc) from None
+    return path
+
+
+def check_writable(path: str) -> None:
+    """Exit with a clear error if ``path`` cannot be written (``check_out``).
+
+    Helper: shared by every cobra-ref subcommand.
+    """
+    check_out(path, "output")
+
+
+def write_text_atomic(path: str, text: str, what: str = "output") -> None:
+    """Check the target (a clear error), then write through a temporary file and a rename.
 
     Helper: shared by every cobra-ref subcommand.
     """
     from ..output import write_text
 
-    check_writable(path)
-    write_text(path, text)
+    check_out(path, what)
+    try:
+        write_text(path, text, what)
+    except OutputError as exc:
+        raise fail(exc) from None
 
 
 @contextlib.contextmanager
@@ -49,22 +86,30 @@ def c_stdout_silenced():
         os.close(devnull)
 
 
-def check_writable(path: str) -> None:
-    """Exit with a clear error if the directory of ``path`` is missing or not writable.
+def failed_path(out: str) -> str:
+    """Where a run that fails part-way is kept: ``OUT`` without its extension + ``.failed.npz``.
 
-    Helper: shared by every cobra-ref subcommand.
+    Helper: shared by every cobra-ref subcommand (``run.npz`` -> ``run.failed.npz``, ``run`` ->
+    ``run.failed.npz``).
     """
-    directory = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(directory):
-        raise SystemExit(f"error: output directory does not exist: {directory}")
-    if not os.access(directory, os.W_OK):
-        raise SystemExit(f"error: output directory is not writable: {directory}")
+    return os.path.splitext(out)[0] + ".failed.npz"
+
+
+def _keep_partial(traj, out: str) -> str:
+    """Write a partial run to ``failed_path(out)``; the sentence that says where it is (or why not)."""
+    failed = failed_path(out)
+    try:
+        traj.to_npz(failed)
+    except (OSError, ValueError) as exc:
+        return f"what was computed could not be kept: {exc}"
+    return f"what was computed up to the failure is in {failed}"
 
 
 def run_and_write(model, reference, duration, settings, out, label, quiet=False, q0=None, qd0=None,
                   meta=None, summary=None, stepper="fast"):
     """Simulate, write the NPZ and print the one-line JSON summary (plus ``summary(traj)``'s keys);
-    a failure mid-run writes what was computed to OUT.failed.npz and exits with the error.
+    a failure mid-run (any exception of the step, or Ctrl-C) writes what was computed to
+    OUT.failed.npz and exits with the error, which names the step and the time.
 
     Helper: shared by every cobra-ref subcommand.
     """
@@ -77,13 +122,23 @@ def run_and_write(model, reference, duration, settings, out, label, quiet=False,
             traj = simulate(model, reference, duration, settings, q0, qd0, progress=progress, stepper=stepper)
     except SimulationError as exc:
         if exc.trajectory is None:  # bad input: nothing was computed, nothing is written
-            raise SystemExit(f"error: {exc}") from None
-        failed = os.path.splitext(out)[0] + ".failed.npz"
-        exc.trajectory.to_npz(failed)
+            raise fail(exc) from None
+        exc.trajectory.meta.update(meta or {})
+        where = _keep_partial(exc.trajectory, out)
         print(json.dumps(exc.trajectory.summary()))
-        raise SystemExit(f"error: {exc}\nwhat was computed up to the failure is in {failed}") from None
+        raise fail(f"{exc}\n{where}") from None
+    except KeyboardInterrupt as exc:
+        traj = getattr(exc, "trajectory", None)
+        if traj is None:
+            raise SystemExit(130) from None
+        traj.meta.update(meta or {})
+        print(f"interrupted at {traj.error}\n{_keep_partial(traj, out)}", file=sys.stderr)
+        raise SystemExit(130) from None
     traj.meta.update(meta or {})
-    traj.to_npz(out)
+    try:
+        traj.to_npz(out)
+    except OSError as exc:  # the target changed during the run (checked before it)
+        raise fail(f"{exc}\n{_keep_partial(traj, out)}") from None
     print(json.dumps({**traj.summary(), **(summary(traj) if summary else {})}))
     return traj
 
@@ -100,3 +155,25 @@ def finite_float(text: str) -> float:
     if not np.isfinite(value):
         raise argparse.ArgumentTypeError(f"must be finite, got {text}")
     return value
+
+
+def gait_param(text: str) -> tuple:
+    """argparse type: ``NAME=VALUE``, a gait parameter and a finite number (the gait checks its
+    range when the reference is built).
+
+    Helper: ``--param`` of cobra-ref simulate.
+    """
+    from ..validation import RULES, ValidationError
+
+    name, sep, value = str(text).partition("=")
+    name = name.strip()
+    if not sep or not name:
+        raise argparse.ArgumentTypeError(f"--param = {text!r}: expected NAME=VALUE, e.g. amplitude=0.4 "
+                                         "(a parameter of the gait)")
+    try:
+        return name, RULES["gait_param"].parse(value.strip(), f"--param {name}")
+    except ValidationError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+gait_param.allowed = "NAME=VALUE: a parameter of the gait, a finite number in the gait's range"

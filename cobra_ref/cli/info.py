@@ -12,7 +12,8 @@ import numpy as np
 
 from ..params import CobraParameters, parameter_table
 from ..robots import cobra_model
-from .common import write_text_atomic
+from ..validation import RULES
+from .common import check_out, write_text_atomic
 
 _AXIS_NAME = {"Rx": "roll (x)", "Ry": "pitch (y)", "Rz": "yaw (z)", "free": "free (6 DoF)"}
 
@@ -50,14 +51,16 @@ def cmd_info(args) -> int:
 
 
 def cmd_export_mjcf(args) -> int:
-    """Write the COBRA + box scene as MJCF (atomically: nothing half-written on failure).
+    """Write the COBRA + box scene as MJCF (atomically: nothing half-written on failure; through a
+    symbolic link to its target; a directory or a device is refused, see :mod:`cobra_ref.output`).
 
     Helper: the command line (cobra-ref info, export-mjcf).
     """
     from ..mjcf import to_mjcf
 
+    check_out(args.out, "OUT.xml")  # before any work: exact name, a regular file (or a link to one)
     xml = to_mjcf(cobra_model(with_box=not args.no_box), timestep=args.timestep)
-    write_text_atomic(args.out, xml)
+    write_text_atomic(args.out, xml, "OUT.xml")
     print(f"wrote {args.out} ({len(xml)} bytes)")
     return 0
 
@@ -70,7 +73,9 @@ def add_parsers(sub) -> None:
     p = sub.add_parser("info", help="print the model with the source of every number")
     p.set_defaults(func=cmd_info)
     p = sub.add_parser("export-mjcf", help="write the model as MuJoCo MJCF XML")
-    p.add_argument("out", metavar="OUT.xml", help="output file")
-    p.add_argument("--timestep", type=float, default=1e-3, help="MuJoCo timestep [s] (default 1e-3)")
+    p.add_argument("out", metavar="OUT.xml", help="output file, written under exactly this name (a symbolic link: "
+                                                  "its target; never a directory or a device)")
+    p.add_argument("--timestep", type=RULES["timestep"].arg("--timestep"), default=1e-3,
+                   help="MuJoCo timestep [s] (default 1e-3)")
     p.add_argument("--no-box", action="store_true", help="export the robot alone")
     p.set_defaults(func=cmd_export_mjcf)

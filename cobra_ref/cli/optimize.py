@@ -5,7 +5,6 @@ Helper: the command-line side of :mod:`cobra_ref.planning` (conventions: :mod:`c
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 
@@ -15,32 +14,8 @@ from ..executors import SerialExecutor
 from ..planning.problem import DECISION, DEFAULTS, RAMP_TIME, ShootingError, make_problem
 from ..planning.results import summary_lines, write_result
 from ..planning.search import optimize
-from .common import c_stdout_silenced, check_writable, finite_float
-
-
-def _goal(text: str) -> tuple:
-    """argparse type: 'X,Y', two finite numbers [m]."""
-    parts = text.split(",")
-    if len(parts) != 2:
-        raise argparse.ArgumentTypeError(f"expected X,Y (two numbers in metres), got {text!r}")
-    try:
-        values = tuple(float(p) for p in parts)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number in {text!r}: expected X,Y in metres") from None
-    if not np.all(np.isfinite(values)):
-        raise argparse.ArgumentTypeError(f"goal must be finite, got {text!r}")
-    return values
-
-
-def _count(text: str) -> int:
-    """argparse type: a non-negative integer."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
-    return value
+from ..validation import RULES
+from .common import c_stdout_silenced, check_writable
 
 
 def _assignments(items, n_values: int, what: str) -> dict:
@@ -75,14 +50,14 @@ def add_parsers(sub) -> None:
                     "('params'), every rollout ('history') and every setting; 'cobra-ref simulate --params OUT' "
                     "replays it. Ctrl-C stops and writes the best rollout so far (with \"interrupted\": true).")
     p.add_argument("--gait", required=True, choices=list(DECISION), help="the gait family")
-    p.add_argument("--goal", type=_goal, default=None, metavar="X,Y",
+    p.add_argument("--goal", type=RULES["goal_pair"].arg("--goal"), default=None, metavar="X,Y",
                    help="where to push the box, relative to its start [m], world axes (x = the robot's initial "
                         f"heading, y = its left; a negative X needs --goal=-0.1,0.2); defaults (goal, --duration, "
                         f"--maxiter) per gait: {goals}")
-    p.add_argument("--duration", type=finite_float, default=None,
+    p.add_argument("--duration", type=RULES["horizon"].arg("--duration"), default=None,
                    help="horizon of each rollout [s] (default per gait: 1.5, sidewinding 3)")
-    p.add_argument("--dt", type=finite_float, default=1e-3, help="time step [s] (default 1e-3)")
-    p.add_argument("--ramp-time", type=finite_float, default=RAMP_TIME,
+    p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=1e-3, help="time step [s] (default 1e-3)")
+    p.add_argument("--ramp-time", type=RULES["ramp_time"].arg("--ramp-time"), default=RAMP_TIME,
                    help=f"ramp-in of the gait's phase rate [s] (default {RAMP_TIME})")
     p.add_argument("--servo", choices=("position", "prescribed"), default="position",
                    help="joints of the rollouts: position (default, the paper's position control within tau_max) "
@@ -90,20 +65,20 @@ def add_parsers(sub) -> None:
                         "above tau_max)")
     p.add_argument("--contact", choices=("compliant", "rigid"), default="compliant",
                    help="contact law of the rollouts (default compliant)")
-    p.add_argument("--box-gap", type=finite_float, default=0.05,
+    p.add_argument("--box-gap", type=RULES["box_gap"].arg("--box-gap"), default=0.05,
                    help="gap between the box and the middle link at the start [m] (default 0.05, assumption C9)")
-    p.add_argument("--maxiter", type=_count, default=None,
+    p.add_argument("--maxiter", type=RULES["maxiter"].arg("--maxiter"), default=None,
                    help="iterations: polls of the compass search, generations of DE (default 6)")
     p.add_argument("--method", choices=("pattern", "de"), default="pattern",
                    help="parallel compass search (default) or scipy differential evolution")
-    p.add_argument("--seed", type=int, default=0, help="random seed of --method de (default 0)")
-    p.add_argument("--popsize", type=int, default=2,
+    p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=0, help="random seed of --method de (default 0)")
+    p.add_argument("--popsize", type=RULES["popsize"].arg("--popsize"), default=2,
                    help="--method de: population = max(5, POPSIZE x parameters) (default 2)")
     p.add_argument("--bound", action="append", default=[], metavar="NAME=LO,HI",
                    help="bounds of a gait parameter (repeatable; adds it to the decision vector)")
     p.add_argument("--start", action="append", default=[], metavar="NAME=VALUE",
                    help="initial guess of a gait parameter (repeatable; default: the gait's defaults)")
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=RULES["workers"].arg("--workers"), default=None,
                    help="worker processes (default: the cores; 1 = serial, in this process)")
     p.add_argument("--out", required=True, help="output params JSON")
     p.add_argument("--quiet", action="store_true", help="no progress lines (the summary is still printed)")

@@ -1,22 +1,32 @@
 """``cobra-ref simulate``: one simulation of COBRA and the box, written to an NPZ, summarized in JSON.
 
 Helper: the command-line side of :func:`cobra_ref.simulate.simulate`; ``--params`` replays an
-optimum of ``cobra-ref optimize`` (:mod:`cobra_ref.planning.results`).
+optimum of ``cobra-ref optimize`` (:mod:`cobra_ref.planning.results`). Every input is checked
+before the run (:mod:`cobra_ref.validation`): the options, the reference (angles within q_max,
+rates against qd_max), the time grid, the output; each option is recorded in the NPZ's ``meta``
+(``options``) so that a run can be repeated.
 """
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
+import sys
 
-import numpy as np
-
-from ..gaits import gait_params
+from ..gaits import GAITS, gait_params
 from ..params import CobraParameters
 from ..planning.cost import shooting_cost
 from ..planning.problem import ShootingError
 from ..planning.results import ParamsRun, params_reference
 from ..robots import cobra_model
-from .common import check_writable, finite_float, run_and_write
+from ..validation import RULES, ValidationError, time_grid
+from .common import c_stdout_silenced, check_out, fail, gait_param, run_and_write
+
+DEFAULT_DURATION = 10.0  # [s] (assumption A11)
+# options that change the model or the start: not with --params, which replays the optimum's own
+MODEL_OPTIONS = (("mu", "--mu"), ("mu_robot_box", "--mu-robot-box"), ("box_mass", "--box-mass"),
+                 ("box_offset", "--box-offset"), ("box_yaw", "--box-yaw"), ("box_gap", "--box-gap"),
+                 ("param", "--param"))
 
 
 def cmd_simulate(args) -> int:
@@ -26,26 +36,103 @@ def cmd_simulate(args) -> int:
     """
     if args.params:
         return cmd_simulate_params(args)
-    from ..reference import ReferenceError, builtin_reference, load_reference
+    from ..reference import ReferenceError, builtin_reference, check_reference, load_reference
     from ..step import StepSettings
 
     # check every input before the (long) run, so that bad input writes nothing
-    check_writable(args.out)
+    check_out(args.out)
+    params = _gait_params(args.param)
+    if params and args.reference:
+        raise fail("--param sets the parameters of a built-in gait (--gait); a --reference file has none")
+    if args.box_offset is not None and args.box_gap is not None:
+        raise fail("--box-gap places the box beside the middle link, --box-offset places it at an offset from "
+                   "the middle: give one of them")
     try:
-        reference = load_reference(args.reference) if args.reference else builtin_reference(args.gait)
         settings = StepSettings(dt=args.dt, contact=args.contact, servo=args.servo)
-    except (ReferenceError, ValueError) as exc:
-        raise SystemExit(f"error: {exc}") from None
-    params = CobraParameters()
-    if args.mu_robot_box is not None:
-        params = dataclasses.replace(params, mu_robot_box=args.mu_robot_box)
+        duration = DEFAULT_DURATION if args.duration is None else args.duration
+        time_grid(duration, settings.dt, exact=True, duration_field="--duration", dt_field="--dt")
+        cobra = _cobra_parameters(args)
+    except ValueError as exc:  # ValidationError
+        raise fail(exc) from None
+    source = args.reference or f"gait {args.gait}"
     try:
-        model = cobra_model(params)
-    except ValueError as exc:
-        raise SystemExit(f"error: {exc}") from None
-    run_and_write(model, reference, 10.0 if args.duration is None else args.duration, settings, args.out,
-                  f"simulate {args.reference or args.gait}", args.quiet, stepper=args.stepper)
+        reference = (load_reference(args.reference, cobra.q_max) if args.reference
+                     else builtin_reference(args.gait, params))
+        warnings = check_reference(reference, duration, cobra.q_max, cobra.qd_max, source)
+    except ReferenceError as exc:
+        raise fail(exc) from None
+    for line in warnings:
+        print(f"warning: {line}", file=sys.stderr)
+    if not args.out.endswith(".npz"):
+        print(f"note: the NPZ is written under the exact name {args.out!r} (no .npz is added)", file=sys.stderr)
+    model = cobra_model(cobra)
+    q0, qd0 = _start(model, reference, settings, args)
+    meta = {"options": _options(args, duration), "cobra_parameters": dataclasses.asdict(cobra),
+            "reference": args.reference, "gait": None if args.reference else args.gait,
+            "gait_params": None if args.reference else gait_params(reference)}
+    run_and_write(model, reference, duration, settings, args.out, f"simulate {source}", args.quiet, q0, qd0,
+                  meta, stepper=args.stepper)
     return 0
+
+
+def _gait_params(items) -> dict:
+    """{name: value} of the --param options (each name once)."""
+    out = {}
+    for name, value in items or ():
+        if name in out:
+            raise fail(f"--param {name} is given twice ({out[name]:g} and {value:g})")
+        out[name] = value
+    return out
+
+
+def _cobra_parameters(args) -> CobraParameters:
+    """The model's parameters with the friction and box options applied (each checked by its rule)."""
+    changes = {name: getattr(args, name) for name in ("mu", "mu_robot_box", "box_mass")
+               if getattr(args, name, None) is not None}
+    return CobraParameters(**changes)
+
+
+def _start(model, reference, settings, args):
+    """(q0, qd0): the placed and settled start with the box options (``start.initial_state``); a
+    placement deep in the ground or the box is refused before it settles."""
+    from ..simulate import _check_start
+    from ..start import initial_state, placed_state
+    from ..step import SimulationError
+
+    gap = 0.05 if args.box_gap is None else args.box_gap
+    try:
+        _check_start(model, placed_state(model, reference, args.box_offset, gap, box_yaw=args.box_yaw))
+    except SimulationError as exc:
+        hint = "; place the box elsewhere with --box-offset DX,DY or --box-gap" if "robot-box" in str(exc) else ""
+        raise fail(f"{exc}{hint}") from None
+    try:
+        with c_stdout_silenced():
+            return initial_state(model, reference, settings, box_offset=args.box_offset, box_gap=gap,
+                                 box_yaw=args.box_yaw)
+    except Exception as exc:  # noqa: BLE001 -- the settling steps can fail in any solver
+        raise fail(f"the start could not be placed and settled: {type(exc).__name__}: {exc}") from None
+
+
+def _options(args, duration: float) -> dict:
+    """The options of the run, JSON-ready (recorded in the NPZ's meta)."""
+    skip = {"func", "command", "quiet"}
+    out = {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(args).items() if k not in skip}
+    out["duration"] = duration
+    out["param"] = dict(args.param or [])
+    return out
+
+
+def gait_name(text: str) -> str:
+    """argparse type: a built-in gait's name (``gaits.GAITS``).
+
+    Helper: the command line (cobra-ref simulate).
+    """
+    if text not in GAITS:
+        raise argparse.ArgumentTypeError(f"unknown gait {text!r}; gaits: {', '.join(GAITS)}")
+    return text
+
+
+gait_name.allowed = ", ".join(GAITS)
 
 
 def add_parsers(sub) -> None:
@@ -56,18 +143,24 @@ def add_parsers(sub) -> None:
     p = sub.add_parser("simulate", help="simulate COBRA pushing the box; write an NPZ, print a JSON summary",
                        description="Simulate COBRA and the box on flat ground for a joint reference. Writes every "
                                    "array (t, q, qd, tau, box_pose, per-step solver records, the contact log) to "
-                                   "OUT.npz and prints a one-line JSON summary (box_displacement, "
-                                   "max_penetration, max_cone_residual, real_time_factor).")
+                                   "OUT (exactly that name) and prints a one-line JSON summary (box_displacement, "
+                                   "max_penetration, max_cone_residual, real_time_factor). A run that fails "
+                                   "part-way keeps what was computed in OUT.failed.npz.")
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--gait", default="C", metavar="NAME",
+    src.add_argument("--gait", default="C", metavar="NAME", type=gait_name,
                      help="a gait with its default parameters: C (default), S, J, J-mirror (lateral rolling, "
                           "A = 0.5 rad, 0.5 Hz), sidewinding (A = 0.6 rad); 'rolling' = C")
-    src.add_argument("--reference", metavar="FILE", help="reference file: .npz (t, q) or .csv (t,J0..J10)")
+    src.add_argument("--reference", metavar="FILE", help="reference file: .npz (t, q) or .csv (t,J0..J10); every "
+                                                         "angle within |q| <= pi/2 rad")
     src.add_argument("--params", metavar="FILE", help="replay an optimum of 'cobra-ref optimize' (gait, parameters, "
-                                                     "start state, dt, horizon)")
-    p.add_argument("--duration", type=finite_float, default=None,
-                   help="simulated time [s] (default 10; with --params the optimization's horizon)")
-    p.add_argument("--dt", type=finite_float, default=1e-3, help="time step [s] (default 1e-3)")
+                                                     "start state, dt, contact, servo, horizon from the file)")
+    p.add_argument("--param", action="append", default=[], type=gait_param, metavar="NAME=VALUE",
+                   help="a parameter of the --gait (repeatable), e.g. amplitude=0.4 (rad), frequency=0.7 (Hz); "
+                        "the gait checks its range")
+    p.add_argument("--duration", type=RULES["duration"].arg("--duration"), default=None,
+                   help=f"simulated time [s], a whole number of steps (default {DEFAULT_DURATION:g}; with --params "
+                        "the optimization's horizon)")
+    p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=1e-3, help="time step [s] (default 1e-3)")
     p.add_argument("--contact", choices=("compliant", "rigid"), default="compliant",
                    help="contact law: compliant (default, the paper's spring-damper contact) or rigid "
                         "(eq. (2)-(6) as written)")
@@ -76,9 +169,22 @@ def add_parsers(sub) -> None:
                         "(the joints follow the reference exactly, torques recovered)")
     p.add_argument("--stepper", choices=("fast", "reference"), default="fast",
                    help="fast (default) or reference (the readable step, slow; the same physics)")
-    p.add_argument("--mu-robot-box", type=finite_float, default=None,
-                   help="friction coefficient of robot-box contacts (default 0.5, assumption A22)")
-    p.add_argument("--out", default="run.npz", help="output NPZ (default run.npz)")
+    p.add_argument("--mu", type=RULES["mu"].arg("--mu"), default=None,
+                   help="friction coefficient robot-ground and box-ground (default 1.0; A13)")
+    p.add_argument("--mu-robot-box", type=RULES["mu_robot_box"].arg("--mu-robot-box"), default=None,
+                   help="friction coefficient of robot-box contacts (default 0.5; assumption A22)")
+    p.add_argument("--box-mass", type=RULES["box_mass"].arg("--box-mass"), default=None,
+                   help="mass of the box [kg] (default 0.5)")
+    p.add_argument("--box-offset", type=RULES["box_offset_pair"].arg("--box-offset"), default=None, metavar="DX,DY",
+                   help="the box's centre relative to the middle of the robot [m], world axes (x = the robot's "
+                        "heading, y = its left; a negative DX needs --box-offset=-0.1,0.2); default: beside the "
+                        "middle link (A9)")
+    p.add_argument("--box-yaw", type=RULES["box_yaw"].arg("--box-yaw"), default=None,
+                   help="the box's heading about the vertical [rad], world axes (default: a face towards the robot; "
+                        "0 with --box-offset)")
+    p.add_argument("--box-gap", type=RULES["box_gap"].arg("--box-gap"), default=None,
+                   help="gap between the box and the middle link at the start [m] (default 0.05; A9)")
+    p.add_argument("--out", default="run.npz", help="output NPZ, written under exactly this name (default run.npz)")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=cmd_simulate)
 
@@ -91,12 +197,23 @@ def cmd_simulate_params(args) -> int:
     Helper: ``cobra_ref.cli.cmd_simulate`` hands over when ``args.params`` is set (uses
     ``args.params``, ``args.duration`` (None = the JSON's), ``args.out``, ``args.quiet``).
     """
-    check_writable(args.out)
+    from ..reference import ReferenceError, check_reference
+    from ..step import SimulationError
+
+    check_out(args.out)
+    for name, option in MODEL_OPTIONS:
+        if getattr(args, name, None):
+            raise fail(f"--params replays the optimum with its own model and start: {option} cannot be combined "
+                       "with it")
     try:
         run = params_reference(args.params, duration=args.duration)
-    except ShootingError as exc:
-        raise SystemExit(f"error: {exc}") from None
-    meta = {"gait": run.gait, "gait_params": gait_params(run.reference), "params_file": args.params}
+        cobra = run.problem.cobra_parameters()
+        for line in check_reference(run.reference, run.duration, cobra.q_max, cobra.qd_max, f"gait {run.gait}"):
+            print(f"warning: {line}", file=sys.stderr)
+    except (ShootingError, ReferenceError, ValidationError, SimulationError) as exc:
+        raise fail(exc) from None
+    meta = {"gait": run.gait, "gait_params": gait_params(run.reference), "params_file": args.params,
+            "options": {"params": args.params, "duration": run.duration, "stepper": args.stepper}}
     run_and_write(run.model, run.reference, run.duration, run.settings, args.out, f"simulate {args.params}",
                   args.quiet, run.q0, run.qd0, meta, lambda traj: params_summary(run, traj), stepper=args.stepper)
     return 0

@@ -12,7 +12,7 @@ import argparse
 import json
 import sys
 
-from .common import check_writable, finite_float
+from .common import check_out, finite_float
 
 
 def read_run(path: str):
@@ -74,7 +74,7 @@ def cmd_render(args) -> int:
         output_format(args.out)
     except RenderError as exc:
         raise SystemExit(f"error: {exc}") from None
-    check_writable(args.out)
+    check_out(args.out, "--out")
     traj = read_run(args.run)
     try:
         info = render_file(traj, args.out, fps=args.fps, width=args.width, height=args.height, at=args.at,

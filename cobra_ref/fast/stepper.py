@@ -75,8 +75,9 @@ class FastStepper:
         terms = self.chain.terms(q, qd)
         M, h = terms.M, terms.h
         qd_next = qd.copy()
+        q_ref, qd_ref, _ = _reference(reference, t + dt)  # the joints' reference at the end of the step
         if s.servo == "prescribed":
-            qd_next[self.joints.v] = (_reference(reference, t + dt)[0] - q[self.joints.q]) / dt
+            qd_next[self.joints.v] = (q_ref - q[self.joints.q]) / dt
         M_F = M[F]
         L = _cholesky(M_F[:, F])
         rhs = dt * (tau_ext - h)[F] - M_F[:, P] @ (qd_next[P] - qd[P])
@@ -89,7 +90,7 @@ class FastStepper:
         B = _trtrs(L, J[:, F].T, lower=1)[0]
         Minv_JT = _trtrs(L, B, lower=1, trans=1)[0]
         G = B.T @ B
-        problem = least_action_problem(model, G, J @ qd_next, contacts, q, t, reference, s)
+        problem = least_action_problem(model, G, J @ qd_next, contacts, q, q_ref, qd_ref, s, self.joints)
         clock.append(time.perf_counter())
         # Step 6: eq. (6)
         self.qp.new_step()
@@ -106,7 +107,7 @@ class FastStepper:
         potential = float(-self.chain.mass @ (terms.com @ model.gravity))
         result = StepResult(self._integrate(q, qd_next), qd_next, tau, contacts, p, J_c @ qd_next, info,
                             kkt_residuals(problem, x), approach_speed(J_c, qd), np.diag(G)[:3 * contacts.m:3],
-                            *energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential, s), self.memory)
+                            *energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential, s, self.joints), q_ref, self.memory)
         clock.append(time.perf_counter())
         for phase, t0, t1 in zip(PHASES, clock[:-1], clock[1:]):
             self.timing[phase] += t1 - t0

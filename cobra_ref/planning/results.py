@@ -39,33 +39,93 @@ def problem_to_dict(problem: ShootingProblem) -> dict:
 def problem_from_dict(d: dict) -> ShootingProblem:
     """The problem back from ``problem_to_dict``'s output; ShootingError if malformed.
 
-    Helper: replay of a params JSON.
+    Helper: replay of a params JSON. Every setting is checked by its rule
+    (:mod:`cobra_ref.validation`) and the message names it ("malformed settings in params JSON:
+    settings.<field>: ..."): a missing key, a string where a number belongs, a non-finite number,
+    dt and duration (a time grid of at most ``MAX_STEPS``), the goal (``check_goal``: not at the
+    box's start, reachable), the decision (names, bounds lower < upper, x0 within them), the
+    weights (finite, >= 0), the CobraParameters (each field's rule), servo and contact law.
     """
+    from ..params import CobraParameters
+    from ..validation import RULES, ValidationError, is_number, time_grid
+    from .problem import check_goal
+
+    where = "settings"
+
+    def malformed(message: str) -> ShootingError:
+        return ShootingError(f"malformed settings in params JSON: {where}: {message}")
+
     try:
+        if not isinstance(d, dict):
+            raise TypeError(f"expected an object, got {type(d).__name__}")
+        where = "settings.decision"
         dec = d["decision"]
+        names = tuple(map(str, dec["names"]))
+        lower, upper, x0 = (_floats(dec[k], len(names), f"decision.{k}") for k in ("lower", "upper", "x0"))
+        for n, lo, hi, x in zip(names, lower, upper, x0):
+            if not lo < hi:
+                raise ValueError(f"bounds of {n} must have lower < upper, got [{lo}, {hi}]")
+            if not lo <= x <= hi:
+                raise ValueError(f"x0 {n} = {x} is outside its bounds [{lo}, {hi}]")
+        where = "settings.dt/duration"
+        dt, duration = float(RULES["dt"].check(d["dt"], "dt")), d["duration"]
+        time_grid(duration, dt, exact=False)
+        duration = float(duration)
+        where = "settings.goal"
+        goal = check_goal(_floats(d["goal"], 2, "goal"), duration)
+        where = "settings.fixed"
+        fixed = d["fixed"]
+        if not isinstance(fixed, dict) or not all(is_number(v) and np.isfinite(v) for v in fixed.values()):
+            raise ValueError(f"expected {{name: finite number}}, got {fixed!r}")
+        where = "settings.weights"
+        weights = d["weights"]
+        if not isinstance(weights, dict):
+            raise ValueError(f"expected {{term: weight}}, got {weights!r}")
+        for k, v in weights.items():
+            RULES["weight"].check(v, f"weights.{k}")
+        weights = Weights(**weights)
+        where = "settings.box_pose0/middle_pose0/box_direction"
+        box_pose0, middle_pose0 = _floats(d["box_pose0"], 7, "box_pose0"), _floats(d["middle_pose0"], 3, "middle_pose0")
+        direction = None if d["box_direction"] is None else _floats(d["box_direction"], 2, "box_direction")
+        where = "settings.cobra_parameters"
+        cobra = d["cobra_parameters"]
+        if not isinstance(cobra, dict):
+            raise ValueError(f"expected {{parameter: value}}, got {cobra!r}")
+        cobra = tuple((str(k), tuple(v) if isinstance(v, list) else v) for k, v in cobra.items())
+        CobraParameters(**dict(cobra))
+        where = "settings"
         problem = ShootingProblem(
-            str(d["gait"]), _floats(d["goal"], 2), float(d["duration"]), float(d["dt"]), tuple(map(str, dec["names"])),
-            _floats(dec["lower"]), _floats(dec["upper"]), _floats(dec["x0"]),
-            tuple(sorted((str(k), float(v)) for k, v in d["fixed"].items())), Weights(**d["weights"]),
-            _floats(d["box_pose0"], 7), _floats(d["middle_pose0"], 3),
-            None if d["box_direction"] is None else _floats(d["box_direction"], 2),
-            tuple((str(k), tuple(v) if isinstance(v, list) else v) for k, v in d["cobra_parameters"].items()),
-            str(d.get("servo", "position")), str(d.get("contact", "compliant")))
+            str(d["gait"]), goal, duration, dt, names, lower, upper, x0,
+            tuple(sorted((str(k), float(v)) for k, v in fixed.items())), weights, box_pose0, middle_pose0,
+            direction, cobra, str(d.get("servo", "position")), str(d.get("contact", "compliant")))
+        if problem.gait not in DECISION:
+            raise ValueError(f"unknown gait {problem.gait!r}; gaits: {', '.join(DECISION)}")
+        where = "settings (the gait at x0)"
         problem.reference(problem.x0)
+        where = "settings.servo/contact"
         problem.settings()
-        problem.cobra_parameters()
-    except (KeyError, TypeError, ValueError, AttributeError) as exc:
-        raise ShootingError(f"malformed settings in params JSON: {type(exc).__name__}: {exc}") from None
-    if problem.gait not in DECISION or not (len(problem.names) == len(problem.lower) == len(problem.upper)):
-        raise ShootingError(f"malformed settings in params JSON: gait {problem.gait!r} or decision sizes")
+    except KeyError as exc:
+        raise malformed(f"missing key {exc}") from None
+    except ShootingError as exc:
+        raise malformed(str(exc)) from None
+    except ValidationError as exc:
+        raise malformed(str(exc)) from None
+    except (TypeError, ValueError, AttributeError) as exc:
+        raise malformed(f"{type(exc).__name__}: {exc}") from None
     return problem
 
 
-def _floats(values, n: int | None = None) -> tuple:
-    out = tuple(float(v) for v in values)
-    if (n is not None and len(out) != n) or not all(np.isfinite(out)):
-        raise ValueError(f"expected {n or 'some'} finite numbers, got {values!r}")
-    return out
+def _floats(values, n: int | None = None, field: str = "values") -> tuple:
+    """The finite numbers in ``values`` as floats (``n`` of them, if given); a ValueError naming
+    ``field`` for a string, a non-finite number or a wrong count."""
+    from ..validation import is_number
+
+    if isinstance(values, (str, bytes, dict)) or not hasattr(values, "__iter__"):
+        raise ValueError(f"{field}: expected {n or 'some'} numbers, got {values!r}")
+    values = list(values)
+    if (n is not None and len(values) != n) or not all(is_number(v) and np.isfinite(v) for v in values):
+        raise ValueError(f"{field}: expected {n or 'some'} finite numbers, got {values!r}")
+    return tuple(float(v) for v in values)
 
 
 def code_version() -> dict:
@@ -112,10 +172,13 @@ def write_result(result: ShootingResult, path: str) -> dict:
 
 
 def load_result(path: str) -> dict:
-    """Read a params JSON with clear errors (missing, not JSON, not ours, malformed settings).
+    """Read a params JSON with clear errors (missing, not JSON, not ours, malformed settings,
+    parameters the gait refuses or outside the optimization's bounds).
 
     Helper: ``cobra-ref simulate --params`` and the figures.
     """
+    from ..validation import is_number
+
     if not os.path.isfile(path):
         raise ShootingError(f"params file not found: {path}")
     try:
@@ -128,12 +191,27 @@ def load_result(path: str) -> dict:
     for key in ("params", "settings", "cost"):
         if key not in record:
             raise ShootingError(f"{path}: malformed params file, missing {key!r}")
-    problem = problem_from_dict(record["settings"])
     try:
-        record["params"] = {str(k): float(v) for k, v in record["params"].items()}
+        problem = problem_from_dict(record["settings"])
+    except ShootingError as exc:
+        raise ShootingError(f"{path}: {exc}") from None
+    params = record["params"]
+    if not isinstance(params, dict) or not all(is_number(v) and np.isfinite(v) for v in params.values()):
+        raise ShootingError(f"{path}: malformed 'params': expected {{name: finite number}}, got {params!r}")
+    if not (is_number(record["cost"]) and np.isfinite(record["cost"])):
+        raise ShootingError(f"{path}: malformed 'cost': expected a finite number, got {record['cost']!r}")
+    try:
+        record["params"] = {str(k): float(v) for k, v in params.items()}
         gait(problem.gait, **record["params"])
     except (AttributeError, TypeError, ValueError) as exc:
         raise ShootingError(f"{path}: malformed 'params': {exc}") from None
+    for n, lo, hi in zip(problem.names, problem.lower, problem.upper):
+        if n not in record["params"]:
+            raise ShootingError(f"{path}: malformed 'params': missing the decision parameter {n!r}")
+        v = record["params"][n]
+        if not lo <= v <= hi:
+            raise ShootingError(f"{path}: params {n} = {v:g} is outside the optimization's bounds [{lo:g}, {hi:g}] "
+                                "(settings.decision): not an optimum of this problem")
     record["problem"] = problem
     return record
 
@@ -200,13 +278,19 @@ def params_reference(path: str, duration: float | None = None) -> ParamsRun:
     """Read a params JSON and return everything to replay its optimum with ``simulate``.
 
     Helper: ``cobra-ref simulate --params``. ``duration`` None = the optimization's horizon (then
-    ``params_summary`` checks that the replayed cost equals the recorded one). Raises
-    ``ShootingError`` for a missing or malformed file.
+    ``params_summary`` checks that the replayed cost equals the recorded one; else a whole number of
+    the optimization's steps). Raises ``ShootingError`` for a missing or malformed file or a bad
+    ``duration``.
     """
+    from ..validation import ValidationError, time_grid
+
     record = load_result(path)
     problem: ShootingProblem = record["problem"]
-    if duration is not None and not (np.isfinite(duration) and duration > 0):
-        raise ShootingError(f"duration must be positive and finite, got {duration}")
+    if duration is not None:
+        try:
+            time_grid(duration, problem.dt, exact=True)
+        except ValidationError as exc:
+            raise ShootingError(str(exc)) from None
     x = decision_vector(problem, record["params"])
     model = cobra_model(problem.cobra_parameters())
     q0, qd0 = start_state(problem, x, model)
