@@ -91,8 +91,8 @@ def stick_slip_compliance(v_s: float, bound: np.ndarray, G_TT: np.ndarray) -> np
     """
     if v_s <= 0:
         return np.zeros_like(bound)
-    R_max = STICK_SLIP_MAX * G_TT
-    return np.where(bound > 0.0, np.minimum(v_s / np.where(bound > 0.0, bound, 1.0), R_max), 0.0)
+    loaded = bound > 0.0
+    return np.where(loaded, np.minimum(v_s / np.where(loaded, bound, 1.0), STICK_SLIP_MAX * G_TT), 0.0)
 
 
 def servo_rows(model, q_joint, q_ref, qd_ref, dt: float):

@@ -62,7 +62,7 @@ FP_TOL = 1e-6  # natural residual of Coulomb's law, relative to max p_N
 FP_MAX = 50  # friction fixed-point iterates per step
 NEWTON_MAX_GROWTH = 3.0  # a Newton guess may at most triple the sum of the normal impulses
 RELEASED = 1e-9  # a contact whose normal impulse is below RELEASED max p_N carries nothing
-NEWTON_TOL = 1e-8  # Newton's iterations stop when a step changes no impulse by more than this (relative)
+NEWTON_TOL = 1e-6  # Newton's iterations stop when a step changes no impulse by more than this (relative)
 _gesv = get_lapack_funcs("gesv", (np.zeros(1),))
 
 
@@ -146,6 +146,19 @@ def hessian(problem: LeastAction, pbar_N: np.ndarray, R_T=None) -> np.ndarray:
     return H
 
 
+def residual(problem: LeastAction, x: np.ndarray, pbar_N: np.ndarray) -> np.ndarray:
+    """r = (G + R) x + c with the stick-slip compliance of pbar_N: each row's law residual.
+
+    Helper: ``hessian(problem, pbar_N) @ x + problem.c`` without forming that matrix.
+    """
+    r = problem.H @ x + problem.c
+    m = problem.m
+    R_T = stick_slip(problem, pbar_N)
+    r[1:3 * m:3] += R_T * x[1:3 * m:3]
+    r[2:3 * m:3] += R_T * x[2:3 * m:3]
+    return r
+
+
 def stick_slip(problem: LeastAction, pbar_N: np.ndarray) -> np.ndarray:
     """The friction rows' compliance (m,) that depends on pbar_N (compliant law; 0 for the rigid one).
 
@@ -189,21 +202,25 @@ def bounds(problem: LeastAction, pbar_N: np.ndarray) -> tuple[np.ndarray, np.nda
 
     Helper: the box of the module docstring's aligned square.
     """
-    radius = problem.mu * pbar_N
-    lo = np.column_stack([np.zeros_like(radius), -radius, -radius]).ravel()
-    hi = np.column_stack([np.full_like(radius, np.inf), radius, radius]).ravel()
-    return np.concatenate([lo, problem.lo]), np.concatenate([hi, problem.hi])
+    m, radius = problem.m, problem.mu * pbar_N
+    lo, hi = np.zeros(len(problem.c)), np.full(len(problem.c), np.inf)
+    lo[1:3 * m:3] = lo[2:3 * m:3] = -radius
+    hi[1:3 * m:3] = hi[2:3 * m:3] = radius
+    lo[3 * m:], hi[3 * m:] = problem.lo, problem.hi
+    return lo, hi
 
 
 def coulomb_split(x: np.ndarray, r: np.ndarray, H: np.ndarray, m: int):
     """(p_N (m,), p_T (m, 2), z (m, 2)): normal and friction impulses, and z = p_T - r_T / a.
 
     Helper: z_i is where contact i's friction would go without its bound (module docstring);
-    a_i is the mean of its two tangential diagonal entries of H.
+    a_i is the mean of its two tangential diagonal entries of H (the matrix H, or directly
+    those means, (m,)).
     """
     p = x[:3 * m].reshape(m, 3)
     r_T = r[:3 * m].reshape(m, 3)[:, 1:]
-    return p[:, 0], p[:, 1:], p[:, 1:] - r_T / _tangential_diagonal(H, m)[:, None]
+    a = H if H.ndim == 1 else _tangential_diagonal(H, m)
+    return p[:, 0], p[:, 1:], p[:, 1:] - r_T / a[:, None]
 
 
 def project_disk(v: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -252,14 +269,15 @@ def guess(problem: LeastAction, x: np.ndarray, theta=None):
     was solved with, kept for sticking contacts by the plain update.
     """
     m = problem.m
-    H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
-    p_N, p_T, z = coulomb_split(x, H @ x + problem.c, H, m)
+    p_N = np.maximum(x[0:3 * m:3], 0.0)
     newton = coulomb_newton(problem, x)
     if newton is not None and (p_N.sum() <= 0.0 or newton[0].sum() <= NEWTON_MAX_GROWTH * p_N.sum()):
         return newton
+    H = hessian(problem, p_N)
+    _, p_T, z = coulomb_split(x, H @ x + problem.c, H, m)
     theta = np.arctan2(p_T[:, 1], p_T[:, 0]) if theta is None else theta
-    sliding = np.hypot(*z.T) > problem.mu * np.maximum(p_N, 0.0)
-    return np.maximum(p_N, 0.0), np.where(sliding, np.arctan2(z[:, 1], z[:, 0]), theta), x
+    sliding = np.hypot(*z.T) > problem.mu * p_N
+    return p_N, np.where(sliding, np.arctan2(z[:, 1], z[:, 0]), theta), x
 
 
 class ActiveSet(NamedTuple):
@@ -272,11 +290,12 @@ class ActiveSet(NamedTuple):
 
 
 def active_set(problem: LeastAction, x: np.ndarray, r: np.ndarray, H: np.ndarray) -> ActiveSet:
-    """The active set of impulses x with residual r = H x + c: released, sliding, saturated rows.
+    """The active set of impulses x with residual r = H x + c (H, or its tangential means: ``coulomb_split``):
+    released, sliding, saturated rows.
 
     Helper: released = p_N below RELEASED max p_N; sliding = |z_i| > mu p_N,i (the friction would
     leave its circle without the bound); a servo row is held at a bound it sits on when its
-    gradient pushes against that bound.
+    residual pushes against that bound.
     """
     m = problem.m
     p_N, _, z = coulomb_split(x, r, H, m)
@@ -300,22 +319,35 @@ def coulomb_newton(problem: LeastAction, x: np.ndarray, rounds: int = 4, steps: 
 
     (friction on its circle, pointing against the slip), with R(x) the stick-slip compliance of
     the compliant law, which depends on p_N. The active set starts as x's (``active_set``); after
-    ``steps`` Newton iterations, rows whose solution breaks their set's inequalities change set
-    (``_corrected``: a sticking contact outside its circle slides, a sliding one whose slip turns
-    sticks, a contact pulling is released, a released one that closes is engaged, a servo row
-    beyond its bound saturates, a saturated one pulled back is freed), for up to ``rounds``
-    rounds. None if the linear system is singular, the result not finite, or the set still
-    changes.
+    at most ``steps`` Newton iterations, rows whose solution breaks their set's inequalities
+    change set (``_corrected``: a sticking contact outside its circle slides, a sliding one whose
+    slip turns sticks, a contact pulling is released, a released one that closes is engaged, a
+    servo row beyond its bound saturates, a saturated one pulled back is freed), for up to
+    ``rounds`` rounds. None if the linear system is singular, the result not finite, or the set
+    still changes.
     """
-    m, n = problem.m, len(x)
+    m = problem.m
     H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
-    act = active_set(problem, x, H @ x + problem.c, H)
+    r = H @ x + problem.c
+    act = active_set(problem, x, r, H)
+    # the sliding contacts' angles start at their friction's direction (against the slip if it has none yet)
+    p_T, r_T = x[:3 * m].reshape(m, 3)[:, 1:], r[:3 * m].reshape(m, 3)[:, 1:]
+    start = np.where((np.hypot(*p_T.T) > 0)[:, None], p_T, -r_T)
+    theta0 = np.arctan2(start[:, 1], start[:, 0])
     for _ in range(rounds):
-        solved = _newton_on(problem, x, act, steps)
-        if solved is None:
-            return None
-        X, theta = solved
-        corrected = _corrected(problem, X, theta, act)
+        system = _NewtonSystem(problem, act)
+        X, theta = x.copy(), theta0.copy()
+        for _ in range(steps):
+            K, F, r = system.at(X, theta)
+            _, _, d, info = _gesv(K, -F)  # LAPACK's LU solve
+            if info != 0 or not np.isfinite(d).all():
+                return None
+            X, theta[system.S] = X + d[:len(X)], theta[system.S] + d[len(X):]
+            # Newton's method converges quadratically: after a step of relative size s the error is
+            # of the order s^2, so a step below sqrt(NEWTON_TOL) ends it
+            if np.abs(d).max() <= np.sqrt(NEWTON_TOL) * max(float(np.abs(X).max()), 1e-300):
+                break
+        corrected = _corrected(problem, X, theta, act, system.residual(X))
         if all(np.array_equal(a, b) for a, b in zip(corrected, act)):
             p_N, p_T = np.maximum(X[0:3 * m:3], 0.0), X[:3 * m].reshape(m, 3)[:, 1:]
             return p_N, np.where(act.sliding, theta, np.arctan2(p_T[:, 1], p_T[:, 0])), X
@@ -323,83 +355,88 @@ def coulomb_newton(problem: LeastAction, x: np.ndarray, rounds: int = 4, steps: 
     return None
 
 
-def _newton_on(problem: LeastAction, x, act: ActiveSet, steps: int):
-    """(X, theta) from ``steps`` Newton iterations on the system of ``coulomb_newton`` for ``act``, or None."""
-    m, n = problem.m, len(x)
-    S = np.flatnonzero(act.sliding)
-    H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
-    p_T0, r_T0 = x[:3 * m].reshape(m, 3)[:, 1:], (H @ x + problem.c)[:3 * m].reshape(m, 3)[:, 1:]
-    # the sliding contacts' angles start at their friction's direction (against the slip if it has none yet)
-    start = np.where((np.hypot(*p_T0.T) > 0)[:, None], p_T0, -r_T0)
-    theta = np.arctan2(start[:, 1], start[:, 0])
-    pinned = np.concatenate([np.repeat(act.released, 3), act.at_lo | act.at_hi])
-    target = np.concatenate([np.zeros(3 * m), np.where(act.at_lo, problem.lo, problem.hi)])
-    X = x.copy()
-    for _ in range(steps):
-        K, F = _newton_system(problem, X, theta, S, pinned, target)
-        _, _, d, info = _gesv(K, -F)  # LAPACK's LU solve
-        if info != 0 or not np.all(np.isfinite(d)):
-            return None
-        X, theta[S] = X + d[:n], theta[S] + d[n:]
-        if np.abs(d).max() <= NEWTON_TOL * max(float(np.abs(X).max()), 1e-300):
-            break
-    return X, theta
+class _NewtonSystem:
+    """Jacobian K and residual F of ``coulomb_newton``'s system for one active set, at (X, theta_S).
+
+    The unknowns are X (n,) then theta_S; the rows are r's, replaced by the circle's conditions on
+    the tangent rows of the sliding contacts, then one row per sliding contact (index D).
+    """
+
+    def __init__(self, problem: LeastAction, act: ActiveSet):
+        m, n = problem.m, len(problem.c)
+        S = np.flatnonzero(act.sliding)
+        size = n + len(S)
+        self.problem, self.m, self.n, self.S = problem, m, n, S
+        self.N, self.T1, self.T2, self.D = 3 * S, 3 * S + 1, 3 * S + 2, n + np.arange(len(S))
+        self.T = np.concatenate([self.T1, self.T2])
+        self.pinned = np.flatnonzero(np.concatenate([np.repeat(act.released, 3), act.at_lo | act.at_hi]))
+        self.target = np.concatenate([np.zeros(3 * m), np.where(act.at_lo, problem.lo, problem.hi)])[self.pinned]
+        self.G_TT = _tangential_diagonal(problem.H, m)
+        self.R_max = STICK_SLIP_MAX * self.G_TT
+        # positions in K.flat of every contact's tangential diagonal entries (3i+1, 3i+1), (3i+2, 3i+2),
+        # of their derivatives by p_N, (3i+1, 3i), (3i+2, 3i), and of the pinned rows' diagonal
+        i = np.arange(m)
+        tangent = np.concatenate([3 * i + 1, 3 * i + 2])
+        self.tangent, self.diag_T, self.dT_dN = tangent, tangent * (size + 1), tangent * size + np.tile(3 * i, 2)
+        self.diag_pinned = self.pinned * (size + 1)
+        self.K = np.zeros((size, size))
+        self.F = np.zeros(size)
+
+    def residual(self, X) -> np.ndarray:
+        """r = (G + R(X)) X + c at X."""
+        return residual(self.problem, X, np.maximum(X[0:3 * self.m:3], 0.0))
+
+    def at(self, X, theta):
+        """(K, F, r) at (X, theta) (``coulomb_newton``'s system)."""
+        problem, m, n, K, F = self.problem, self.m, self.n, self.K, self.F
+        N, T1, T2, D = self.N, self.T1, self.T2, self.D
+        p_N = np.maximum(X[0:3 * m:3], 0.0)
+        R_T = stick_slip_compliance(problem.stiction_velocity, problem.mu * p_N, self.G_TT)
+        K[:n, :n], K[:n, n:] = problem.H, 0.0
+        K.flat[self.diag_T] += np.concatenate([R_T, R_T])
+        r = K[:n, :n] @ X + problem.c
+        F[:n] = r
+        # the stick-slip compliance R_T = v_s / (mu p_N) where it is not capped: d r_T / d p_N = -R_T p_T / p_N
+        uncapped = (R_T < self.R_max) & (p_N > 0)
+        dR = np.where(uncapped, R_T / np.where(uncapped, p_N, 1.0), 0.0)
+        K.flat[self.dT_dN] -= np.concatenate([dR, dR]) * X[self.tangent]
+        # sliding contact i (row D): p_T = mu p_N e(theta) and e_perp . r_T = 0, d e_perp / d theta = -e
+        mu, c, sn = problem.mu[self.S], np.cos(theta[self.S]), np.sin(theta[self.S])
+        K[D, :n] = c[:, None] * K[T2, :n] - sn[:, None] * K[T1, :n]
+        K[D, n:] = 0.0
+        F[D] = c * r[T2] - sn * r[T1]
+        K[D, D] = -(c * r[T1] + sn * r[T2])
+        K[self.T] = 0.0
+        K[T1, T1] = K[T2, T2] = 1.0
+        K[T1, N], K[T2, N] = -mu * c, -mu * sn
+        K[T1, D], K[T2, D] = mu * X[N] * sn, -mu * X[N] * c
+        F[T1], F[T2] = X[T1] - mu * X[N] * c, X[T2] - mu * X[N] * sn
+        # released contacts and saturated servo rows are pinned at their targets
+        K[self.pinned] = 0.0
+        K.flat[self.diag_pinned] = 1.0
+        F[self.pinned] = X[self.pinned] - self.target
+        return K, F, r
 
 
-def _corrected(problem: LeastAction, X, theta, act: ActiveSet) -> ActiveSet:
-    """The active set after the changes that the Newton solution (X, theta) of ``act`` asks for."""
+def _corrected(problem: LeastAction, X, theta, act: ActiveSet, r) -> ActiveSet:
+    """The active set after the changes that the Newton solution (X, theta) of ``act`` asks for (r: its residual)."""
     m = problem.m
-    r = hessian(problem, np.maximum(X[0:3 * m:3], 0.0)) @ X + problem.c
     p = X[:3 * m].reshape(m, 3)
     r3 = r[:3 * m].reshape(m, 3)
-    e = np.column_stack([np.cos(theta), np.sin(theta)])
-    tol = 1e-9 * max(float(np.abs(p[:, 0]).max(initial=0.0)), 1e-300)  # impulses
-    tol_r = 1e-9 * max(float(np.abs(r3).max(initial=0.0)), 1e-300)  # the laws' residuals (velocities)
-    outside = np.hypot(*p[:, 1:].T) > problem.mu * p[:, 0] + tol
-    turned = (e * r3[:, 1:]).sum(axis=1) > tol_r  # the slip runs along the friction: it should stick
+    tol = 1e-9 * np.abs(p[:, 0]).max(initial=0.0)  # impulses
+    tol_r = 1e-9 * np.abs(r3).max(initial=0.0)  # the laws' residuals (velocities)
+    outside = np.hypot(p[:, 1], p[:, 2]) > problem.mu * p[:, 0] + tol
+    turned = np.cos(theta) * r3[:, 1] + np.sin(theta) * r3[:, 2] > tol_r  # the slip runs along the friction: it should stick
     engaged = act.released & (r3[:, 0] < -tol_r)  # a released contact that would close: it is engaged, sliding
     released = (act.released & ~engaged) | (~act.released & (p[:, 0] < -tol))
     sliding = ~released & ((act.sliding & ~turned) | (~act.sliding & outside) | engaged)
     x_s, r_s, lo, hi = X[3 * m:], r[3 * m:], problem.lo, problem.hi
-    tol_s = 1e-9 * max(float(np.abs(hi).max(initial=0.0)), 1e-300)
-    tol_rs = 1e-9 * max(float(np.abs(r_s).max(initial=0.0)), 1e-300)
+    tol_s = 1e-9 * np.abs(hi).max(initial=0.0)
+    tol_rs = 1e-9 * np.abs(r_s).max(initial=0.0)
     free = ~act.at_lo & ~act.at_hi
     at_lo = (act.at_lo & (r_s >= -tol_rs)) | (free & (x_s < lo - tol_s))
     at_hi = (act.at_hi & (r_s <= tol_rs)) | (free & (x_s > hi + tol_s))
     return ActiveSet(released, sliding, at_lo, at_hi)
-
-
-def _newton_system(problem: LeastAction, X, theta, S, pinned, target):
-    """Jacobian K and residual F of ``coulomb_newton``'s system at (X, theta_S)."""
-    m, n, s, v_s = problem.m, len(X), len(S), problem.stiction_velocity
-    p_N = np.maximum(X[0:3 * m:3], 0.0)
-    R_T = stick_slip(problem, p_N)
-    H = hessian(problem, p_N, R_T)
-    r = H @ X + problem.c
-    K, F = np.zeros((n + s, n + s)), np.zeros(n + s)
-    K[:n, :n], F[:n] = H, r
-    # the stick-slip compliance R_T = v_s / (mu p_N) (where not capped): d r_T / d p_N = -v_s p_T / (mu p_N^2)
-    i = np.flatnonzero((R_T > 0) & (R_T < STICK_SLIP_MAX * _tangential_diagonal(problem.H, m)) & (p_N > 0))
-    dR = -v_s / (problem.mu[i] * p_N[i] ** 2)
-    K[3 * i + 1, 3 * i] += dR * X[3 * i + 1]
-    K[3 * i + 2, 3 * i] += dR * X[3 * i + 2]
-    # sliding contact i (row n + k): p_T = mu p_N e(theta) and e_perp . r_T = 0, d e_perp / d theta = -e
-    N, T1, T2, D = 3 * S, 3 * S + 1, 3 * S + 2, n + np.arange(s)
-    mu, c, sn = problem.mu[S], np.cos(theta[S]), np.sin(theta[S])
-    K[D, :n] = -sn[:, None] * K[T1, :n] + c[:, None] * K[T2, :n]
-    F[D] = -sn * r[T1] + c * r[T2]
-    K[D, D] = -(c * r[T1] + sn * r[T2])
-    K[T1], K[T2] = 0.0, 0.0
-    K[T1, T1] = K[T2, T2] = 1.0
-    K[T1, N], K[T2, N] = -mu * c, -mu * sn
-    K[T1, D], K[T2, D] = mu * X[N] * sn, -mu * X[N] * c
-    F[T1], F[T2] = X[T1] - mu * X[N] * c, X[T2] - mu * X[N] * sn
-    # released contacts and saturated servo rows are pinned at their targets
-    rows = np.flatnonzero(pinned)
-    K[rows] = 0.0
-    K[rows, rows] = 1.0
-    F[rows] = X[rows] - target[rows]
-    return K, F
 
 
 def kkt_residuals(problem: LeastAction, x: np.ndarray) -> dict:
@@ -416,9 +453,10 @@ def kkt_residuals(problem: LeastAction, x: np.ndarray) -> dict:
     m = problem.m
     if m == 0:
         return {"complementarity": 0.0, "cone_residual": 0.0, "coulomb_residual": 0.0}
-    H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
+    p_N = np.maximum(x[0:3 * m:3], 0.0)
+    H = hessian(problem, p_N)
     r = H @ x + problem.c
-    p_N, p_T, z = coulomb_split(x, r, H, m)
+    _, p_T, z = coulomb_split(x, r, H, m)
     scale = max(float(p_N.max()), 1e-300)
     cone = np.maximum(np.hypot(*p_T.T) - problem.mu * p_N, 0.0).max() / scale
     return {"complementarity": float(np.abs(p_N * r[0:3 * m:3]).max()), "cone_residual": float(cone),

@@ -24,7 +24,8 @@ The guess is improved by the primal-dual active-set iteration of Hintermueller, 
 
     held at lo:  x_i - r_i / d_i <= lo_i,     held at hi:  x_i - r_i / d_i >= hi_i
 
-repeated until the held set stops changing (at most ``ROUNDS`` times), then certified. Full
+repeated until the held set stops changing (at most ``ROUNDS`` times), then certified (a given
+guess is certified at once, and the rounds only start if it fails). Full
 rounds can cycle (H is not an M-matrix); then up to ``SINGLE_FLIPS`` more rounds change only
 the worst violation beyond its certificate tolerance.
 """
@@ -65,8 +66,8 @@ def solve_box(H, c, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = RO
     d = H.diagonal()
     fixed = lo == hi
     x, before = x0, None
+    r = None if guess is not None else H @ x + c  # the guess needs no residual
     for k in range(rounds + SINGLE_FLIPS + 1):
-        r = H @ x + c if (k or guess is None) else None  # the guess needs no residual
         if k == 0 and guess is not None:
             at_lo, at_hi = guess
             at_hi = at_hi & ~fixed
@@ -102,6 +103,10 @@ def solve_box(H, c, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = RO
             if info != 0:
                 return None
             x[free] = x_F
+        r = H @ x + c
+        # a guessed set is most often right: its solution is certified at once
+        if k == 0 and guess is not None and box_certificate(H, c, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, r):
+            return x, at_lo, at_hi, r
     else:
         return None  # the held set still changes: leave it to OSQP
     if not box_certificate(H, c, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, r):

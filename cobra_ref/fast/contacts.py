@@ -58,8 +58,15 @@ def find_contacts(model, terms: ChainTerms, margin: float) -> Contacts:
     body_B = np.repeat([-1] + [b for body in box_bodies for b in (body, -1)], counts)
     body_A, feature = np.concatenate(body_A).astype(int), np.concatenate(feature).astype(int)
     g, n, point_A, point_B = (np.concatenate(x) for x in (g, n, point_A, point_B))
-    frames = gapfn.contact_frames(n)
+    # the ground's frame is the same for every contact: [e_z, e_x, e_y] (gaps.contact_frame); the box's are computed
+    frames = np.broadcast_to(GROUND_FRAME, (len(g), 3, 3)).copy()
+    on_box = kind == ROBOT_BOX
+    if on_box.any():
+        frames[on_box] = gapfn.contact_frames(n[on_box])
     return Contacts(kind, body_A, body_B, feature, g.astype(float), frames, point_A, point_B)
+
+
+GROUND_FRAME = gapfn.contact_frame(gapfn.e_z)
 
 
 _E_Z_ROWS = np.tile(gapfn.e_z, (64, 1))

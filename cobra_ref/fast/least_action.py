@@ -5,9 +5,10 @@ Helper (performance): ``FastBoxQP`` is a drop-in ``solve_qp`` for
 OSQP solve per iterate (:func:`cobra_ref.qp.solve_box_qp`). Both return the minimiser of the
 same strictly convex QP to OSQP's tolerance (tests run them side by side):
 
-* the first iterate of every step is solved by OSQP, loosely (``LOOSE_EPS``, no polishing,
-  warm-started from the previous step's impulses): the design asks for an OSQP solve every
-  step. Its active set is then re-solved exactly and certified (:mod:`cobra_ref.fast.active_set`);
+* the first iterate of every step is solved by OSQP, loosely (``LOOSE_EPS``, no polishing, no
+  Ruiz scaling, warm-started from the friction loop's guess): the design asks for an OSQP solve
+  every step. It takes one or two ADMM iterations, so the scaling, recomputed at every update of
+  the matrix, would cost more than it saves. Its active set is then re-solved exactly and certified (:mod:`cobra_ref.fast.active_set`);
 * later iterates are first re-solved on the active set of the iterate they start from, and
   certified;
 * where no certificate is found, OSQP solves the QP to ``cobra_ref.qp.EPS`` with polishing.
@@ -52,21 +53,24 @@ class FastBoxQP:
         x0 = np.clip(x0, lo, hi)
         solves, iterations, y = 0, 0, None
         if first:
-            res = self._osqp(H, c, lo, hi, x0, loose=True)
+            # OSQP starts from x0 and its duals: minus the residual on the rows x0 holds at a bound
+            at_lo, at_hi = held_at_bounds(x0, lo, hi)
+            y0 = np.where(at_lo | at_hi, -(H @ x0 + c), 0.0)
+            res = self._osqp(H, c, lo, hi, x0, y0, loose=True)
             solves, iterations = 1, res.info.iter
             if res.info.status in ("solved", "solved inaccurate", "maximum iterations reached"):
                 x0, y = res.x, res.y
         certified = solve_box(H, c, lo, hi, x0, EPS, EPS, guess=held_at_bounds(x0, lo, hi, y))
         if certified is not None:
             return BoxQPSolution(certified[0], np.zeros(len(c)), iterations, "solved", solves)
-        res = self._osqp(H, c, lo, hi, x0, loose=False)
+        res = self._osqp(H, c, lo, hi, x0, None, loose=False)
         if res.info.status not in ("solved", "solved inaccurate"):
             raise ContactSolveError(f"OSQP status '{res.info.status}' after {res.info.iter} iterations "
                                     f"({len(c)} rows)")
         return BoxQPSolution(res.x, res.y, iterations + res.info.iter, res.info.status, solves + 1)
 
-    def _osqp(self, H, c, lo, hi, x0, loose: bool):
-        """One OSQP solve on the cached instance for this size, warm-started at x0."""
+    def _osqp(self, H, c, lo, hi, x0, y0, loose: bool):
+        """One OSQP solve on the cached instance for this size, warm-started at x0 (and y0, if given)."""
         n = len(c)
         key = (n, loose)
         if key not in self._solvers:
@@ -79,6 +83,7 @@ class FastBoxQP:
             eps = LOOSE_EPS if loose else EPS
             solver.setup(P=P, q=c, A=sparse.identity(n, format="csc"), l=lo, u=hi, eps_abs=eps, eps_rel=eps,
                          polishing=not loose, polish_refine_iter=5, verbose=False, warm_starting=True,
+                         check_termination=1 if loose else 25, scaling=0 if loose else 10,
                          max_iter=LOOSE_MAX_ITER if loose else MAX_ITER)
             if len(self._solvers) > 64:
                 self._solvers.clear()
@@ -86,5 +91,5 @@ class FastBoxQP:
         else:
             solver = self._solvers[key]
             solver.update(Px=H[self._upper[n]], q=c, l=lo, u=hi)
-        solver.warm_start(x=x0)
+        solver.warm_start(x=x0, y=np.zeros(n) if y0 is None else y0)
         return solver.solve(raise_error=False)
