@@ -63,6 +63,7 @@ FP_MAX = 50  # friction fixed-point iterates per step
 NEWTON_MAX_GROWTH = 3.0  # a Newton guess may at most triple the sum of the normal impulses
 RELEASED = 1e-9  # a contact whose normal impulse is below RELEASED max p_N carries nothing
 NEWTON_TOL = 1e-6  # Newton's iterations stop when a step changes no impulse by more than this (relative)
+_SQRT_NEWTON_TOL = np.sqrt(NEWTON_TOL)
 _gesv = get_lapack_funcs("gesv", (np.zeros(1),))
 
 
@@ -345,7 +346,7 @@ def coulomb_newton(problem: LeastAction, x: np.ndarray, rounds: int = 4, steps: 
             X, theta[system.S] = X + d[:len(X)], theta[system.S] + d[len(X):]
             # Newton's method converges quadratically: after a step of relative size s the error is
             # of the order s^2, so a step below sqrt(NEWTON_TOL) ends it
-            if np.abs(d).max() <= np.sqrt(NEWTON_TOL) * max(float(np.abs(X).max()), 1e-300):
+            if np.abs(d).max() <= _SQRT_NEWTON_TOL * np.abs(X).max():
                 break
         corrected = _corrected(problem, X, theta, act, system.residual(X))
         if all(np.array_equal(a, b) for a, b in zip(corrected, act)):
@@ -377,7 +378,7 @@ class _NewtonSystem:
         # of their derivatives by p_N, (3i+1, 3i), (3i+2, 3i), and of the pinned rows' diagonal
         i = np.arange(m)
         tangent = np.concatenate([3 * i + 1, 3 * i + 2])
-        self.tangent, self.diag_T, self.dT_dN = tangent, tangent * (size + 1), tangent * size + np.tile(3 * i, 2)
+        self.tangent, self.diag_T, self.dT_dN = tangent, tangent * (size + 1), tangent * size + np.concatenate([3 * i, 3 * i])
         self.diag_pinned = self.pinned * (size + 1)
         self.K = np.zeros((size, size))
         self.F = np.zeros(size)

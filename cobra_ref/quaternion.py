@@ -17,7 +17,7 @@ def quat_to_rot(quat_wxyz: np.ndarray) -> np.ndarray:
 
     Implements: the Euler-Rodrigues formula R = (w^2 - u.u) 1 + 2 u u^T + 2 w [u]x, u = (x, y, z).
     """
-    w, x, y, z = quat_wxyz
+    w, x, y, z = np.asarray(quat_wxyz, dtype=float).tolist()  # Python floats: faster scalar arithmetic
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],

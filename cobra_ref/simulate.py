@@ -174,9 +174,10 @@ class _Log:
         onset = np.array([keys[i] not in self.loaded for i in active], dtype=bool)
         speed = np.where(onset, res.approach[active], 0.0)
         impact = speed > IMPACT_SPEED
-        s["impact_count"][k] = int(impact.sum())
-        s["impact_impulse"][k] = float(np.sum(speed[impact] / res.G_NN[active][impact]))
-        s["impact_energy"][k] = float(np.sum(0.5 * speed[impact] ** 2 / res.G_NN[active][impact]))
+        if impact.any():  # (the arrays start at zero)
+            s["impact_count"][k] = int(impact.sum())
+            s["impact_impulse"][k] = float(np.sum(speed[impact] / res.G_NN[active][impact]))
+            s["impact_energy"][k] = float(np.sum(0.5 * speed[impact] ** 2 / res.G_NN[active][impact]))
         self.loaded = {keys[i] for i in active}
         if len(active):
             rows = self.contact_rows
