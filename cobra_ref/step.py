@@ -249,8 +249,10 @@ def energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential: float, set
     """(kinetic, potential, elastic, work_actuators, work_contacts) of one step (StepResult).
 
     Helper: the energy ledger, at the midpoint velocity qd_mid = (qd + qd+) / 2, for which
-    Delta KE = qd_mid . M (qd+ - qd) exactly at fixed M; the elastic energy is
-    sum 1/2 k g^2 over the compressed contacts (g < 0) of the compliant law.
+    Delta KE = qd_mid . M (qd+ - qd) exactly at fixed M: the bodies' balance is
+    W_act + W_contact = Delta (KE + PE). The elastic energy is sum 1/2 k g^2 over the
+    compressed contacts (g < 0) of the compliant law, so the contacts dissipate
+    -W_contact - Delta E_elastic.
     """
     qd_mid = 0.5 * (qd + qd_next)
     elastic = 0.0

@@ -286,6 +286,10 @@ RULES = {
     "bench_duration": Rule("duration", "s", 0.0, 60.0, low_open=True, why="a benchmark of at most a minute",
                            note="a whole number of 1 ms steps"),
     # gait parameters given on the command line (the gait checks each one's own range)
+    "study_duration": Rule("duration", "s", 0.0, 20.0, low_open=True,
+                           why="each of the study's runs; the finest dt (0.25 ms) takes 4000 steps per second"),
+    "scenario_duration": Rule("duration", "s", 0.0, 60.0, low_open=True, why="each scenario of the sweep"),
+    "count": Rule("count", "-", 1, 100_000, kind="int"),
     "gait_param": Rule("gait parameter", "-", why="the gait checks its own range"),
 }
 RULES["box_offset_pair"] = PairRule("box_offset", RULES["box_offset"], ("DX", "DY"))

@@ -9,9 +9,9 @@ from __future__ import annotations
 import argparse
 
 from ..executors import limit_blas_threads
-from . import bench, figures, info, optimize, simulate, view
+from . import bench, convergence, figures, info, optimize, simulate, sweep, view
 
-SUBCOMMANDS = (info, simulate, optimize, figures, view, bench)
+SUBCOMMANDS = (info, simulate, optimize, figures, view, bench, convergence, sweep)
 
 
 def build_parser() -> argparse.ArgumentParser:

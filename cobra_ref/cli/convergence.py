@@ -1,0 +1,63 @@
+"""``cobra-ref convergence``: one gait at dt = 2, 1, 0.5, 0.25 ms, for both contact models.
+
+Helper: the command-line side of :mod:`cobra_ref.reproduce.convergence`.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from ..validation import RULES, ValidationError, check_choice
+from .common import c_stdout_silenced, check_out, fail, write_text_atomic
+
+
+def cmd_convergence(args) -> int:
+    """Run the study, print its table, write it as JSON.
+
+    Helper: the command line (cobra-ref convergence).
+    """
+    from ..reproduce.convergence import SETTINGS, changes, format_table, study
+
+    if args.json is not None:
+        check_out(args.json, "--json")
+    settings = tuple(s.strip() for s in args.settings.split(","))
+    try:
+        for name in settings:
+            check_choice("--settings", name, SETTINGS)
+    except ValidationError as exc:
+        raise fail(exc) from None
+    say = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+    with c_stdout_silenced():
+        result = study(args.gait, args.duration, settings=settings, progress=say)
+    print(format_table(result, args.gait))
+    if args.json is not None:
+        record = {"gait": args.gait, "duration": args.duration,
+                  "results": {name: {str(dt): row for dt, row in rows.items()} for name, rows in result.items()},
+                  "changes": {name: changes(rows) for name, rows in result.items()}}
+        write_text_atomic(args.json, json.dumps(record, indent=1) + "\n", "--json")
+        print(f"wrote {args.json}")
+    return 0
+
+
+def add_parsers(sub) -> None:
+    """The ``convergence`` subcommand.
+
+    Helper: the command line (cobra-ref convergence).
+    """
+    from ..gaits import GAITS
+
+    p = sub.add_parser("convergence", help="one gait at dt = 2, 1, 0.5, 0.25 ms: do forces, torques, power converge?",
+                       description="Simulates one gait at dt = 2, 1, 0.5 and 0.25 ms with the high-fidelity "
+                                   "setting (compliant contact, position servo) and the rigid one (rigid contact, "
+                                   "prescribed joints), and prints per dt: contact force peaks (raw, 2 ms mean, "
+                                   "99th percentile), torque and power peaks, the box's displacement and impacts "
+                                   "per second.")
+    p.add_argument("--gait", default="J", choices=tuple(GAITS), help="the gait (default J)")
+    p.add_argument("--duration", type=RULES["study_duration"].arg("--duration"), default=2.0,
+                   help="simulated time per run [s] (default 2)")
+    p.add_argument("--settings", default="high-fidelity,rigid", help="comma separated: high-fidelity, rigid "
+                                                                      "(default both)")
+    p.add_argument("--json", metavar="FILE", help="also write the table as JSON (exactly this name)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=cmd_convergence)

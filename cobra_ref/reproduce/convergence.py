@@ -1,0 +1,128 @@
+"""``cobra-ref convergence``: do the results hold when dt halves? One gait at dt = 2, 1, 0.5, 0.25 ms.
+
+Helper: the time-step convergence study of the paper's non-impulsive premise. For one gait and
+each setting (contact law and servo), ``study`` simulates ``duration`` seconds at each dt and
+``metrics`` measures what the paper's figures show:
+
+* contact force of each body (the vector sum of its contacts' forces, [N]): the raw per-step
+  peak, the peak of its ``WINDOW`` (2 ms) moving mean, and the 99th percentile of the loaded
+  steps. A touchdown on the paper's damper (d = 1e3 N s/m) lasts about m / d, under a
+  millisecond for one link, so a per-step peak at these dt is an average over the step, and
+  the 2 ms mean is the quantity that can converge;
+* joint torque: the peak of |tau| and of its 2 ms mean [N m];
+* locomotion power sum_j |tau_j qd_j|: the peak and the peak of its 2 ms mean [W];
+* the box's displacement after ``duration`` [m] and the impacts per second (assumption A26).
+
+An impulsive model shows itself here: its peaks grow like 1 / dt (a velocity jump takes one
+step whatever its length), a non-impulsive one's converge. ``changes`` reports each metric's
+relative change between successive dt.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..analysis import impacts, locomotion_power
+from ..contact import ROBOT_BOX
+from ..gaits import gait
+from ..robots import cobra_model
+from ..simulate import simulate
+from ..step import StepSettings
+
+DTS = (2e-3, 1e-3, 5e-4, 2.5e-4)
+WINDOW = 2e-3  # [s] the moving mean of forces, torques and power
+SETTINGS = {"high-fidelity": ("compliant", "position"), "rigid": ("rigid", "prescribed")}
+
+
+def moving_mean(y: np.ndarray, dt: float, window: float = WINDOW) -> np.ndarray:
+    """Means of y over every run of window / dt consecutive steps (along axis 0).
+
+    Helper: the 2 ms mean of the convergence metrics.
+    """
+    n = max(1, int(round(window / dt)))
+    if len(y) < n:
+        return y.mean(axis=0, keepdims=True)
+    c = np.cumsum(np.concatenate([np.zeros((1,) + y.shape[1:]), y]), axis=0)
+    return (c[n:] - c[:-n]) / n
+
+
+def body_forces(traj, model) -> np.ndarray:
+    """(N, nb) norm of the sum of the contact forces on each body per step [N].
+
+    Helper: the contact log's forces act on body A (the robot link, or the box on the ground);
+    the box also feels minus the robot-box rows.
+    """
+    c = traj.contacts
+    F = np.zeros((len(traj.tau), model.nb, 3))
+    steps, bodies, force = c["contact_step"].astype(int), c["contact_body"].astype(int), c["contact_force"]
+    np.add.at(F, (steps, bodies), force)
+    robot_box = np.flatnonzero(c["contact_kind"] == ROBOT_BOX)
+    if len(robot_box) and model.boxes:
+        np.add.at(F, (steps[robot_box], model.boxes[0].body), -force[robot_box])
+    return np.linalg.norm(F, axis=2)
+
+
+def metrics(traj, model) -> dict:
+    """The convergence metrics of one run (module docstring).
+
+    Helper: one row of the study's table.
+    """
+    dt = traj.dt
+    F = body_forces(traj, model)
+    tau = np.abs(traj.tau).max(axis=1) if traj.tau.size else np.zeros(len(traj.tau))
+    power = locomotion_power(traj)[1]
+    return {"force_peak": float(F.max()), "force_peak_2ms": float(moving_mean(F, dt).max()),
+            "force_p99": float(np.percentile(F[F > 0], 99)) if np.any(F > 0) else 0.0,
+            "torque_peak": float(tau.max()), "torque_peak_2ms": float(moving_mean(tau, dt).max()),
+            "power_peak": float(power.max()), "power_peak_2ms": float(moving_mean(power, dt).max()),
+            "box_displacement": float(np.linalg.norm(traj.box_pose[-1, :2] - traj.box_pose[0, :2])),
+            "impacts_per_second": impacts(traj)["impacts_per_second"],
+            "fixed_point_converged": float(np.mean(traj.steps["fp_converged"]))}
+
+
+def study(gait_name: str = "J", duration: float = 2.0, dts=DTS, settings=tuple(SETTINGS), progress=None) -> dict:
+    """{setting: {dt: metrics}} of one gait (module docstring).
+
+    Helper: ``cobra-ref convergence``.
+    """
+    model = cobra_model()
+    out = {}
+    for name in settings:
+        contact, servo = SETTINGS[name]
+        out[name] = {}
+        for dt in dts:
+            start = time.perf_counter()
+            traj = simulate(model, gait(gait_name), duration, StepSettings(dt=dt, contact=contact, servo=servo))
+            out[name][dt] = {**metrics(traj, model), "seconds": time.perf_counter() - start}
+            if progress:
+                progress(f"{gait_name} {name} dt = {dt * 1e3:g} ms: {time.perf_counter() - start:.0f} s")
+    return out
+
+
+def changes(rows: dict) -> dict:
+    """{metric: [relative change from each dt to the next smaller one]} of one setting's rows.
+
+    Helper: the convergence verdicts (|change| <= 10 %, 25 %, 5 % in the README's table).
+    """
+    dts = sorted(rows, reverse=True)
+    keys = [k for k in rows[dts[0]] if k not in ("seconds", "fixed_point_converged")]
+    return {k: [(rows[b][k] - rows[a][k]) / rows[a][k] if rows[a][k] else float("nan") for a, b in zip(dts, dts[1:])]
+            for k in keys}
+
+
+def format_table(result: dict, gait_name: str) -> str:
+    """The study as a text table: one block per setting, one column per dt.
+
+    Helper: what ``cobra-ref convergence`` prints.
+    """
+    lines = []
+    for name, rows in result.items():
+        dts = sorted(rows, reverse=True)
+        lines.append(f"{gait_name}, {name} ({' + '.join(SETTINGS[name])})")
+        lines.append(f"  {'dt [ms]':<24}" + "".join(f"{dt * 1e3:>10g}" for dt in dts))
+        for key in rows[dts[0]]:
+            if key != "seconds":
+                lines.append(f"  {key:<24}" + "".join(f"{rows[dt][key]:>10.4g}" for dt in dts))
+    return "\n".join(lines)
