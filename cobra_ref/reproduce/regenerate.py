@@ -63,7 +63,7 @@ def specs_for(gaits=PAPER_GAITS, quick: bool = False, dt: float = 1e-3, params: 
     return [RunSpec(g, duration=duration, dt=dt, params=dict(params.get(g, {}))) for g in gaits]
 
 
-OPTIMIZED_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "optimized")
+OPTIMIZED_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "optimized")  # cobra_ref/optimized
 # the direction-control optimizations: goal (dx, dy) relative to the box's start, and the gait
 DIRECTIONS = {"ahead": ("J", (0.3, 0.0)), "left": ("J-mirror", (0.25, 0.15)), "right": ("C", (0.2, -0.15))}
 
