@@ -34,6 +34,7 @@ from .gaits import N_JOINTS
 from .quaternion import quat_to_rot
 
 JOINT_VELOCITIES = slice(6, 6 + N_JOINTS)  # the joint rates in qd (after the head's 6 base velocities)
+ROBUST_PERCENTILE = 99.0  # the percentile reported beside each maximum [%]
 
 
 def joint_rates(traj) -> np.ndarray:
@@ -105,6 +106,21 @@ def box_distance(traj) -> np.ndarray:
     return np.linalg.norm(d, axis=1)
 
 
+def percentile_99(values, empty: float = 0.0) -> float:
+    """The 99th percentile of ``values`` (flattened), or ``empty`` when there are none.
+
+    Helper: the robust peak reported beside each maximum (``summary``; the annotations of figs. 7
+    and 8). For the n values sorted, s_0 <= ... <= s_{n-1}, the rank r = 0.99 (n - 1) and::
+
+        p99 = s_i + (r - i) (s_{i+1} - s_i),   i = floor(r)
+
+    (linear interpolation between order statistics, numpy's default), so p99 <= max and the top
+    1 % of the samples (a landing impact, a contact switch) cannot set it.
+    """
+    v = np.asarray(values, dtype=float).ravel()
+    return float(np.percentile(v, ROBUST_PERCENTILE)) if len(v) else float(empty)
+
+
 def efficiency_fit(traj) -> tuple[float, float]:
     """(slope, intercept) of the least-squares line W_loc = slope W_box + intercept over the push,
     the samples from the first robot-box contact on; (inf, nan) when the robot does no work on
@@ -144,14 +160,17 @@ def impacts(traj) -> dict:
     just before (eq. (4) on the normal row), and it is an impact when v_a > 1 cm/s. Per impact,
     the impulse that stops the approach is m v_a and the energy it takes out 1/2 m v_a^2, with
     m = 1 / G_NN the mass the contact sees (the Delassus matrix, eq. (5)). Returns impacts per
-    second, the total impact impulse [N s] and energy [J], and the largest approach speed [m/s].
+    second, the total impact impulse [N s] and energy [J], the largest approach speed [m/s] and
+    the 99th percentile of the onsets' approach speeds (``percentile_99`` over the onsets with
+    v_a > 0; 0 without any).
     """
     s, duration = traj.steps, max(float(traj.t[-1] - traj.t[0]), 1e-300) if len(traj.t) else 1e-300
     speed = traj.contacts["contact_onset_speed"]
     return {"impacts_per_second": float(np.sum(s["impact_count"])) / duration,
             "impact_impulse": float(np.sum(s["impact_impulse"])),
             "impact_energy": float(np.sum(s["impact_energy"])),
-            "max_approach_speed": float(np.max(speed, initial=0.0))}
+            "max_approach_speed": float(np.max(speed, initial=0.0)),
+            "p99_approach_speed": percentile_99(speed[speed > 0])}
 
 
 class ContactForces(NamedTuple):
@@ -185,9 +204,21 @@ def summary(traj) -> dict:
 
     Helper: W_loc(T), W_box(T), the efficiency slope, peak and mean |P_loc|, the box's
     displacement and distance, and the run's health (robot-box steps, torque excess, the share
-    of steps whose friction fixed point converged).
+    of steps whose friction fixed point converged), plus ``impacts``.
+
+    Beside each maximum, the 99th percentile of the same samples (``percentile_99``), which a
+    single spike does not move:
+
+    * ``peak_abs_power`` / ``p99_abs_power``: of |P|_loc,k over the N steps [W];
+    * ``peak_abs_tau`` / ``p99_abs_tau``: of max_j |tau_j,k|, the largest joint torque of each
+      step [N m];
+    * ``max_tau_excess`` / ``p99_tau_excess``: of the steps' ``tau_excess`` = max_j |tau_j| -
+      tau_max [N m] (-inf for a run without steps);
+    * ``max_approach_speed`` / ``p99_approach_speed``: of the contact onsets' approach speeds
+      [m/s] (``impacts``).
     """
     p, p_abs = locomotion_power(traj)
+    tau_step = np.abs(traj.tau).max(axis=1) if traj.tau.size else np.zeros(0)
     w_loc, w_box = locomotion_work(traj), box_work(traj)
     d = traj.box_pose[-1, :2] - traj.box_pose[0, :2]
     return {
@@ -196,11 +227,15 @@ def summary(traj) -> dict:
         "box_work": float(w_box[-1]),
         "efficiency_slope": efficiency_slope(traj),
         "peak_abs_power": float(p_abs.max(initial=0.0)),
+        "p99_abs_power": percentile_99(p_abs),
+        "peak_abs_tau": float(tau_step.max(initial=0.0)),
+        "p99_abs_tau": percentile_99(tau_step),
         "mean_abs_power": float(p_abs.mean()) if len(p_abs) else 0.0,
         "box_displacement": [float(d[0]), float(d[1])],
         "box_distance": float(np.linalg.norm(d)),
         "robot_box_steps": int(len(np.unique(traj.contacts["contact_step"][traj.contacts["contact_kind"] == ROBOT_BOX]))),
         "max_tau_excess": float(traj.steps["tau_excess"].max(initial=-np.inf)),
+        "p99_tau_excess": percentile_99(traj.steps["tau_excess"], empty=-np.inf),
         "fixed_point_converged": float(np.mean(traj.steps["fp_converged"])) if len(traj.tau) else 1.0,
         **impacts(traj),
     }
@@ -208,5 +243,5 @@ def summary(traj) -> dict:
 
 __all__ = ["joint_rates", "locomotion_power", "locomotion_work", "box_point_velocity", "contact_power_on_box",
            "box_work", "box_distance", "efficiency_fit", "efficiency_slope", "impacts", "ContactForces", "contact_forces",
-           "summary",
+           "summary", "percentile_99",
            "ROBOT_GROUND", "ROBOT_BOX", "BOX_GROUND"]

@@ -1,10 +1,11 @@
 """Figure scripts of [COBRA] figs. 3-9 and the GIFs, one module per figure.
 
 Helper: every module in ``FIGURES`` has
-``make(results: dict[str, Trajectory], out_dir: str, model) -> list[str]`` and runs standalone as
+``make(results: dict[str, Trajectory], out_dir: str, model, ensemble=None) -> list[str]``
+(``ensemble``: {gait: [``analysis.summary`` per member]}, see ``common``) and runs standalone as
 ``python -m cobra_ref.figures.<module>`` (quick 1 s simulations, see ``common.main``).
 ``PAPER_FIGURES`` are the paper's figures (PNG + PDF each); ``FIGURES`` adds ``animate`` (one GIF
-per gait) at the end.
+per gait, and the note ``animations.json`` of how each was rendered) at the end.
 """
 
 from __future__ import annotations
@@ -16,9 +17,9 @@ PAPER_FIGURES = ("fig03_snapshots", "fig04_robot_contacts", "fig05_box_contacts"
 FIGURES = PAPER_FIGURES + ("animate",)
 
 
-def make_all(results: dict, out_dir: str, model, animations: bool = True) -> list[str]:
+def make_all(results: dict, out_dir: str, model, animations: bool = True, ensemble: dict | None = None) -> list[str]:
     """Run every module's ``make`` in ``FIGURES`` order (without the GIFs if ``animations`` is
-    False) and return all paths written.
+    False), each with ``ensemble``, and return all paths written.
 
     Helper: ``results`` = {gait: Trajectory} (e.g. from ``reproduce.run_all``); gaits missing from
     it are left out of every figure.
@@ -26,7 +27,7 @@ def make_all(results: dict, out_dir: str, model, animations: bool = True) -> lis
     paths = []
     for name in FIGURES if animations else PAPER_FIGURES:
         module = importlib.import_module(f"{__name__}.{name}")
-        paths += module.make(results, out_dir, model)
+        paths += module.make(results, out_dir, model, ensemble=ensemble)
     return paths
 
 

@@ -1,9 +1,15 @@
 """Shared helpers of the paper-figure scripts: style, gait order and colours, saving, ``main``.
 
 Helper: no physics here. Every figure module has
-``make(results, out_dir, model) -> list[str]`` and ends with ``common.main(make)``, so that
-``python -m cobra_ref.figures.fig07_power --out figures`` runs the quick simulations through
-``reproduce.run_all`` (cached) and writes that one figure.
+``make(results, out_dir, model, ensemble=None) -> list[str]`` and ends with
+``common.main(make)``, so that ``python -m cobra_ref.figures.fig07_power --out figures`` runs the
+quick simulations through ``reproduce.run_all`` (cached) and writes that one figure.
+``results`` = {gait: Trajectory} (the nominal runs); ``ensemble`` = {gait: [summary dict per
+member]}, each ``analysis.summary`` of one member's trajectory, member 0 (the nominal run) first:
+figs. 6 and 9 draw its spread (``draw_spread``), the others draw the nominal runs only.
+
+Figures that compare gaits put them on one y scale (``robust_ylim``), and notes about clipped
+values go above the axes, outside the data (``note_above``, ``clip_note``).
 
 Sizes follow the paper: one column is ``ONE_COLUMN`` = 3.5 in wide, two columns ``TWO_COLUMN`` =
 7 in; fonts are 7-8 pt so the figures stay readable at that size (``STYLE``).
@@ -24,6 +30,7 @@ import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
 import numpy as np  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 
 from ...output import atomic_write  # noqa: E402
 
@@ -155,24 +162,120 @@ def window_mean(t: np.ndarray, y: np.ndarray, window: float = FORCE_WINDOW) -> t
     return centres, sums / (counts if y.ndim == 1 else counts[:, None])
 
 
-def robust_ylim(ax, values: np.ndarray, unit: str = "N", quantile: float = 0.99) -> None:
-    """Cap the y axis at 1.2 x the ``quantile`` of |values| when a few spikes (e.g. the landing
-    impact in the first steps) would otherwise flatten everything else; the clipped maximum is
-    written in the panel's corner.
+CLIP_MARGIN = 1.2  # a y axis capped at a percentile of |values| ends this factor above it
 
-    Helper: readable force / power / torque panels without hiding that the peaks exist.
+
+def clip_levels(values, quantile: float) -> tuple[float, float] | None:
+    """(peak, cap) of |values|: the largest, and ``CLIP_MARGIN`` x the ``quantile`` of them; None
+    when there is no finite non-zero value.
+
+    Helper: ``robust_ylim``'s per-panel levels.
     """
     v = np.abs(np.asarray(values, dtype=float)).ravel()
     v = v[np.isfinite(v) & (v > 0)]
     if len(v) == 0:
-        return
-    cap, peak = 1.2 * float(np.quantile(v, quantile)), float(v.max())
-    if peak <= 1.5 * cap:
-        return
-    lo, hi = ax.get_ylim()
-    ax.set_ylim(max(lo, -cap), min(hi, cap))
-    ax.text(0.99, 0.97, f"peak {peak:.3g} {unit} (clipped)", transform=ax.transAxes, ha="right",
-            va="top", fontsize=5.5, color="0.35")
+        return None
+    return float(v.max()), CLIP_MARGIN * float(np.quantile(v, quantile))
+
+
+def robust_ylim(axes, values, quantile: float = 0.99, bottom: float | None = None) -> list[float | None]:
+    """Give ``axes`` one common y range, capped where a few spikes (e.g. the landing impact in the
+    first steps) would otherwise flatten everything else; return, per axes, the peak of |values|
+    that lies beyond the range (None where nothing is clipped).
+
+    Helper: readable force / power / torque panels that compare gaits on one scale. Each panel's
+    own need is its peak of |values|, or ``CLIP_MARGIN`` x its ``quantile`` when the peak is more
+    than 1.5 times that (a spike); the common limit is the largest need of any panel (+5 %), so
+    every panel's bulk shows and a gait with larger values looks larger. ``axes``: a list of
+    axes, ``values``: a list of one array per axes, ``bottom``: a fixed lower end (0 for
+    magnitudes). Call it after everything is plotted. The caller says what was clipped outside
+    the data area (``clip_note``).
+    """
+    if not axes:
+        return []
+    levels = [clip_levels(v, quantile) for v in values]
+    needs = [peak if peak <= 1.5 * cap else cap for peak, cap in filter(None, levels)]
+    limit = 1.05 * max(needs) if needs else np.inf
+    # the union of the autoscaled ranges (already one range when the axes share y), then capped
+    lo = min(ax.get_ylim()[0] for ax in axes) if bottom is None else bottom
+    hi = max(ax.get_ylim()[1] for ax in axes)
+    for ax in axes:
+        ax.set_ylim(max(lo, -limit), min(hi, limit))
+    return [lv[0] if lv and lv[0] > limit else None for lv in levels]
+
+
+def note_above(ax, text: str) -> None:
+    """Write ``text`` small and grey above the axes' top right corner (the right-hand title slot),
+    outside the data area; the layout makes room for it.
+
+    Helper: clip notes and peak annotations. Column titles then go on the left (``loc="left"``).
+    """
+    ax.set_title(text, loc="right", fontsize=5.5, color="0.35", pad=2)
+
+
+def clip_note(ax, peak: float | None, unit: str = "N") -> None:
+    """``note_above`` "peak <peak> <unit> (clipped)" when ``robust_ylim`` clipped this axes.
+
+    Helper: the clip notes of figs. 4 and 5.
+    """
+    if peak is not None:
+        note_above(ax, f"peak {peak:.3g} {unit} (clipped)")
+
+
+def shared_force_ylim(axes, values, unit: str = "N") -> None:
+    """``robust_ylim`` from 0 on the ``axes`` (one column of force panels, one array of plotted
+    values each) and a ``clip_note`` above each clipped one.
+
+    Helper: the common y scale of the force columns of figs. 4 and 5.
+    """
+    for ax, peak in zip(axes, robust_ylim(axes, values, bottom=0.0)):
+        clip_note(ax, peak, unit)
+
+
+ENSEMBLE_RANGE = (0.1, 0.9)  # the quantiles of an ensemble's members drawn as its range bar
+MEMBERS_GID, RANGE_GID = "ensemble-members", "ensemble-range"  # artist ids: "<gid>:<gait>"
+
+
+def ensemble_values(ensemble: dict | None, gait: str, key: str) -> np.ndarray:
+    """(n,) ``key`` of each member's summary in ``ensemble[gait]`` (member 0, the nominal run,
+    first); empty without an ensemble or without that gait.
+
+    Helper: ``ensemble`` = {gait: [summary dict per member]}, each ``analysis.summary`` of one
+    member's trajectory (figs. 6 and 9).
+    """
+    members = (ensemble or {}).get(gait, [])
+    return np.array([float(m.get(key, np.nan)) for m in members], dtype=float)
+
+
+def draw_spread(ax, x: float, values: np.ndarray, color: str, gait: str, width: float = 0.24) -> int:
+    """Draw an ensemble's values at x: one small dot per member, spread evenly over x +- width / 2
+    in member order, and a black bar from the 10th to the 90th percentile (``ENSEMBLE_RANGE``) at
+    x; return how many members were not drawn (a non-finite value, e.g. an infinite slope).
+
+    Helper: the spread of figs. 6 and 9. The dots' Line2D has gid "ensemble-members:<gait>",
+    the bar's "ensemble-range:<gait>".
+    """
+    v = np.asarray(values, dtype=float)
+    finite = v[np.isfinite(v)]
+    if len(finite):
+        xs = x + width * (np.linspace(-0.5, 0.5, len(finite)) if len(finite) > 1 else np.zeros(1))
+        ax.plot(xs, finite, "o", ls="none", ms=2.2, mfc=color, mec="k", mew=0.3, zorder=3,
+                gid=f"{MEMBERS_GID}:{gait}")
+        lo, hi = np.quantile(finite, ENSEMBLE_RANGE)
+        ax.plot([x, x], [lo, hi], color="k", lw=0.9, marker="_", ms=5, mew=0.9, zorder=4,
+                gid=f"{RANGE_GID}:{gait}")
+    return len(v) - len(finite)
+
+
+def spread_handles(n_members: int) -> list:
+    """Legend entries of ``draw_spread``: the members' dots and the 10-90 % bar.
+
+    Helper: figs. 6 and 9.
+    """
+    lo, hi = (round(100 * q) for q in ENSEMBLE_RANGE)
+    return [Line2D([], [], marker="o", ls="none", ms=2.2, mfc="0.6", mec="k", mew=0.3,
+                   label=f"ensemble members (N = {n_members})"),
+            Line2D([], [], color="k", lw=0.9, marker="_", ms=5, label=f"{lo}-{hi} % of the members")]
 
 
 def empty_panel(ax, text: str = NO_CONTACT) -> None:

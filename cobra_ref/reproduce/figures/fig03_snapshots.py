@@ -9,6 +9,11 @@ posed by ``kinematics.forward_kinematics(model, q)``; the box is a cube of half 
 ``model.boxes[0].half`` posed by ``traj.box_pose``. The box's path so far is a line on the ground,
 the ground a 0.1 m grid. Nothing from ``analysis`` is plotted: this is geometry only.
 
+Camera: elevation ``ELEV``, azimuth ``AZIM`` (matplotlib's view angles, degrees). A mirrored gait
+(J-mirror: the J reflected about the robot's start heading, the x axis, y -> -y) is seen by the
+reflected camera, azimuth -``AZIM``, and lit by the reflected light (``is_mirrored``,
+``draw_scene``): its panels are then the mirror images of the J panels.
+
 The drawing helpers (``scene_polygons``, ``draw_scene``, ``scene_limits``) are shared with
 :mod:`cobra_ref.figures.animate`.
 """
@@ -31,6 +36,8 @@ LIGHT = np.array([-0.3, -0.5, 1.0]) / np.linalg.norm([-0.3, -0.5, 1.0])
 # zoomed 3-D scenes may overhang their axes: draw them whole, and keep them out of the layout
 UNCLIPPED = {"clip_on": False, "in_layout": False}
 HEAD_COLOR, LINK_COLORS, TAIL_COLOR, BOX_COLOR = "#8c2d2d", ("#4a6fa5", "#9db4d6"), "#555555", "#e0a040"
+ELEV, AZIM = 35.0, -60.0  # the camera's view angles [deg]
+MIRROR_SUFFIX = "-mirror"  # a gait named "<gait>-mirror" is <gait> reflected about the x axis (y -> -y)
 
 
 def cylinder_polygons(length: float, radius: float, x_offset: float, R: np.ndarray, p: np.ndarray,
@@ -88,20 +95,21 @@ def body_color(model, i: int) -> str:
     return LINK_COLORS[i % 2] if name.startswith("L") else BOX_COLOR
 
 
-def shade(color: str, normals: list) -> np.ndarray:
-    """(n, 4) RGBA of faces lit by a directional light: k = 0.45 + 0.55 max(0, n . l).
+def shade(color: str, normals: list, light: np.ndarray = LIGHT) -> np.ndarray:
+    """(n, 4) RGBA of faces lit by a directional light l: k = 0.45 + 0.55 max(0, n . l).
 
     Helper: Lambert shading, so the round cylinders read as round.
     """
     rgba = np.array(to_rgba(color))
-    k = 0.45 + 0.55 * np.clip(np.asarray(normals) @ LIGHT, 0.0, 1.0)
+    k = 0.45 + 0.55 * np.clip(np.asarray(normals) @ light, 0.0, 1.0)
     out = np.tile(rgba, (len(normals), 1))
     out[:, :3] *= k[:, None]
     return out
 
 
-def scene_polygons(model, q: np.ndarray, box_pose: np.ndarray) -> tuple[list, np.ndarray]:
-    """All faces of the robot's cylinders and of the box at one instant, with their shaded colours.
+def scene_polygons(model, q: np.ndarray, box_pose: np.ndarray, light: np.ndarray = LIGHT) -> tuple[list, np.ndarray]:
+    """All faces of the robot's cylinders and of the box at one instant, with their colours
+    shaded by the light direction ``light``.
 
     Helper: one list, so matplotlib depth-sorts robot and box faces together.
     """
@@ -112,11 +120,11 @@ def scene_polygons(model, q: np.ndarray, box_pose: np.ndarray) -> tuple[list, np
             continue
         p_i, n_i = cylinder_polygons(*cyl, kin.R[i], kin.o[i])
         polys += p_i
-        colors.append(shade(body_color(model, i), n_i))
+        colors.append(shade(body_color(model, i), n_i, light))
     half = model.boxes[0].half if model.boxes else np.full(3, 0.05)
     p_b, n_b = cube_polygons(np.asarray(half), quat_to_rot(box_pose[3:]), box_pose[:3])
     polys += p_b
-    colors.append(shade(BOX_COLOR, n_b))
+    colors.append(shade(BOX_COLOR, n_b, light))
     return polys, np.concatenate(colors)
 
 
@@ -145,25 +153,37 @@ def ground_grid(lim: np.ndarray) -> Line3DCollection:
     return Line3DCollection(segs, colors="0.8", linewidths=0.4, zorder=0, **UNCLIPPED)
 
 
-def draw_scene(ax, model, traj, k: int, lim: np.ndarray, axes_labels: bool = True) -> None:
+def is_mirrored(gait: str) -> bool:
+    """True for a gait named "<gait>-mirror" (``MIRROR_SUFFIX``): <gait> reflected, y -> -y.
+
+    Helper: which gaits ``draw_scene`` shows with the reflected camera.
+    """
+    return gait.endswith(MIRROR_SUFFIX)
+
+
+def draw_scene(ax, model, traj, k: int, lim: np.ndarray, axes_labels: bool = True, mirror: bool = False) -> None:
     """Draw the ground, the box's path up to step k, the box and the robot at step k on a 3-D axes.
 
     Helper: shared by fig. 3 and the GIFs. Equal scale on x, y, z (``set_box_aspect`` with the
     limits' extents, zoomed; ``UNCLIPPED`` so nothing is cut at the axes' edge); explicit z-orders
     (ground < path < bodies) because mplot3d sorts whole artists, while the faces inside the one
-    body collection are depth-sorted.
+    body collection are depth-sorted. The camera: elevation ``ELEV``, azimuth ``AZIM``; with
+    ``mirror``, the reflection of camera and light about the x-z plane (y -> -y): the direction
+    (cos el cos az, cos el sin az, sin el) becomes the one of azimuth -az, so a mirrored run looks
+    like the mirror image of the original.
     """
+    light = LIGHT * np.array([1.0, -1.0, 1.0]) if mirror else LIGHT
     ax.computed_zorder = False
     ax.set(xlim=lim[0], ylim=lim[1], zlim=lim[2])
     ax.set_autoscale_on(False)
     ax.add_collection3d(ground_grid(lim), autolim=False)
     path = traj.box_pose[: k + 1]
     ax.plot(path[:, 0], path[:, 1], np.full(len(path), 1e-3), color="k", lw=0.9, zorder=1, **UNCLIPPED)
-    polys, colors = scene_polygons(model, traj.q[k], traj.box_pose[k])
+    polys, colors = scene_polygons(model, traj.q[k], traj.box_pose[k], light)
     ax.add_collection3d(Poly3DCollection(polys, facecolors=colors, edgecolors="none", zorder=2, **UNCLIPPED),
                         autolim=False)
     ax.set_box_aspect(tuple(lim[:, 1] - lim[:, 0]), zoom=1.3)
-    ax.view_init(elev=35, azim=-60)
+    ax.view_init(elev=ELEV, azim=-AZIM if mirror else AZIM)
     style_3d_axes(ax, axes_labels)
 
 
@@ -192,10 +212,12 @@ def snapshot_steps(traj, n: int = N_INSTANTS) -> np.ndarray:
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model) -> list[str]:
-    """Write ``fig03_snapshots.png/.pdf``: one row per gait, one 3-D snapshot per column.
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
+    """Write ``fig03_snapshots.png/.pdf``: one row per gait, one 3-D snapshot per column, a
+    mirrored gait seen by the reflected camera.
 
-    Implements: [COBRA] fig. 3 (snapshots of the forward box push for each gait).
+    Implements: [COBRA] fig. 3 (snapshots of the forward box push for each gait). ``ensemble``
+    is accepted for a common signature and not drawn: the nominal runs only.
     """
     rows = common.ordered(results)
     fig = common.new_figure(common.TWO_COLUMN, 1.55 * max(len(rows), 1) + 0.3)
@@ -207,7 +229,7 @@ def make(results: dict, out_dir: str, model) -> list[str]:
         lim = scene_limits(model, traj, steps)
         for c, k in enumerate(steps):
             ax = fig.add_subplot(len(rows), N_INSTANTS, r * N_INSTANTS + c + 1, projection="3d")
-            draw_scene(ax, model, traj, int(k), lim, axes_labels=(c == 0))
+            draw_scene(ax, model, traj, int(k), lim, axes_labels=(c == 0), mirror=is_mirrored(gait))
             ax.set_title(f"{common.gait_label(gait, traj)}, t = {traj.t[k]:.2f} s", pad=-2,
                          color=common.gait_color(gait))
     fig.suptitle(f"Box push snapshots (ground grid {GRID:g} m; black line: box path)")

@@ -4,12 +4,14 @@ The paper's fig. 4 shows, for the C, S, J and sidewinding gaits, "the contact po
 unilateral ground reaction forces" of the links L1..L10 (numbered from the head), split into the
 normal force f_N,i and the tangential force f_T,i. Here each gait is one row of three panels:
 
-* contact timeline: which body touches the ground when (dark = in contact);
+* contact timeline: which body touches the ground when (a bar in the body's colour);
 * f_N,i(t) [N] per link, f_N = f . n;
 * |f_T,i|(t) [N] per link, |f_T| = |f - f_N n|;
 
 both from ``analysis.contact_forces(traj, ROBOT_GROUND, model.nb)`` (forces ON the link, summed
-over a link's contact spheres at each step). Bodies share one colour scale (colour bar).
+over a link's contact spheres at each step). Each body has its own colour of a qualitative
+palette (``BODY_COLORS``), the same in every panel, named in the legend below the panels; the
+force panels of a column share one y scale, so the gaits compare at a glance.
 
 Note: the head and the tail are shown too (rows above L1 and below L10), although the paper's
 figure names only L1..L10: in our runs they carry a good part of the robot's weight, and leaving
@@ -19,27 +21,30 @@ them out would hide where that weight goes.
 from __future__ import annotations
 
 import numpy as np
-from matplotlib import colormaps
-from matplotlib.cm import ScalarMappable
-from matplotlib.colors import BoundaryNorm, ListedColormap
+from matplotlib.colors import to_rgba
+from matplotlib.lines import Line2D
 
 from ...analysis import ROBOT_GROUND, contact_forces
 from . import common
 
-LINK_CMAP = "viridis"
+# Kelly's colours of maximum contrast (K. L. Kelly, "Twenty-two colors of maximum contrast",
+# Color Engineering 3(6), 1965), white left out: 12 bodies, head (black) to tail, that stay
+# apart; the palette repeats for a robot with more bodies
+BODY_COLORS = ("#222222", "#f3c300", "#875692", "#f38400", "#a1caf1", "#be0032", "#c2b280", "#848482",
+               "#008856", "#e68fac", "#0067a5", "#f99379")
 
 
 def link_colors(n: int) -> list:
-    """n colours along ``LINK_CMAP``, head end first.
+    """n colours from ``BODY_COLORS``, head end first.
 
     Helper: the same colour for a body in every panel.
     """
-    cmap = colormaps[LINK_CMAP]
-    return [cmap(x) for x in np.linspace(0.0, 0.9, n)]
+    return [BODY_COLORS[i % len(BODY_COLORS)] for i in range(n)]
 
 
-def plot_timeline(ax, t: np.ndarray, in_contact: np.ndarray, names: list[str]) -> None:
-    """Contact timeline: one row per body (head on top), dark where it touches the ground.
+def plot_timeline(ax, t: np.ndarray, in_contact: np.ndarray, names: list[str], colors: list) -> None:
+    """Contact timeline: one row per body (head on top), in the body's colour where it touches the
+    ground, white elsewhere.
 
     Helper: fig. 4's "which link touches the ground when".
     """
@@ -47,73 +52,74 @@ def plot_timeline(ax, t: np.ndarray, in_contact: np.ndarray, names: list[str]) -
         common.empty_panel(ax)
     dt = t[1] - t[0] if len(t) > 1 else 1.0
     extent = (t[0] if len(t) else 0.0, (t[-1] + dt) if len(t) else 1.0, len(names) + 0.5, 0.5)
-    ax.imshow(in_contact.T.astype(float), aspect="auto", interpolation="nearest", cmap="Greys",
-              vmin=0, vmax=1.25, extent=extent)
+    # (N, n_bodies, 4) RGBA image, transposed to one row per body
+    rgba = np.where(in_contact[..., None], np.array([to_rgba(c) for c in colors]), 1.0)
+    ax.imshow(rgba.transpose(1, 0, 2), aspect="auto", interpolation="nearest", extent=extent)
     ax.set_yticks(range(1, len(names) + 1), names)
     ax.tick_params(axis="y", labelsize=5.5)
     ax.grid(False)
 
 
-def plot_per_link(ax, t: np.ndarray, force: np.ndarray, colors: list) -> None:
+def plot_per_link(ax, t: np.ndarray, force: np.ndarray, colors: list) -> np.ndarray:
     """One line per body of a (N, n_bodies) force array [N], as means over ``common.FORCE_WINDOW``
-    (20 ms); "no contact" when it is all zero.
+    (20 ms); "no contact" when it is all zero. Returns the plotted non-zero means (for the y scale).
 
     Helper: the f_N and f_T panels.
     """
     if len(t) == 0 or not np.any(force):
         common.empty_panel(ax)
-        return
+        return np.zeros(0)
     t_mean, f_mean = common.window_mean(t, force)
     for j, color in enumerate(colors):
         if np.any(force[:, j]):
             ax.plot(t_mean, f_mean[:, j], color=color, lw=0.7)
-    ax.set_ylim(bottom=0.0)
-    common.robust_ylim(ax, f_mean[f_mean > 0])
+    return f_mean[f_mean > 0]
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model) -> list[str]:
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
     """Write ``fig04_robot_contacts.png/.pdf``: per gait, the ground-contact timeline of head,
     L1..L10 and tail, and the normal and tangential robot-ground forces per body over time.
 
     Implements: [COBRA] fig. 4 with ``analysis.contact_forces(traj, ROBOT_GROUND, nb)``.
+    ``ensemble`` is accepted for a common signature and not drawn: the nominal runs only.
     """
     rows = common.ordered(results)
     bodies = common.robot_bodies(model)
     names, idx = [n for n, _ in bodies], [i for _, i in bodies]
     colors = link_colors(len(bodies))
-    fig = common.new_figure(common.TWO_COLUMN, 1.35 * max(len(rows), 1) + 0.5)
-    axes = fig.subplots(max(len(rows), 1), 3, sharex=True, squeeze=False)
+    fig = common.new_figure(common.TWO_COLUMN, 1.35 * max(len(rows), 1) + 0.7)
+    axes = fig.subplots(max(len(rows), 1), 3, sharex=True, sharey="col", squeeze=False)
     if not rows:
         common.empty_panel(axes[0, 0], "no gait to show")
+    plotted = {1: [], 2: []}  # per force column, each row's plotted values
     for r, (gait, traj) in enumerate(rows):
         cf = contact_forces(traj, ROBOT_GROUND, model.nb)
         t = common.step_times(traj)
-        plot_timeline(axes[r, 0], t, cf.in_contact[:, idx], names)
-        plot_per_link(axes[r, 1], t, cf.normal[:, idx], colors)
-        plot_per_link(axes[r, 2], t, cf.tangential[:, idx], colors)
+        plot_timeline(axes[r, 0], t, cf.in_contact[:, idx], names, colors)
+        plotted[1].append(plot_per_link(axes[r, 1], t, cf.normal[:, idx], colors))
+        plotted[2].append(plot_per_link(axes[r, 2], t, cf.tangential[:, idx], colors))
         axes[r, 0].set_ylabel(f"{common.gait_label(gait, traj)}\nbody", color=common.gait_color(gait))
         axes[r, 1].set_ylabel(r"$f_{N,i}$ [N]")
         axes[r, 2].set_ylabel(r"$\|f_{T,i}\|$ [N]")
-    axes[0, 0].set_title("ground contact (dark = touching)")
-    axes[0, 1].set_title("normal force per body (20 ms means)")
-    axes[0, 2].set_title("tangential force per body (20 ms means)")
+    for c, values in plotted.items():
+        common.shared_force_ylim(list(axes[: len(values), c]), values)
+    for ax, title in zip(axes[0], ("ground contact", "normal force", "tangential force")):
+        ax.set_title(title, loc="left")
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
-    _link_colorbar(fig, axes[:, 1:], names)
+    _body_legend(fig, names, colors)
     return common.save(fig, out_dir, "fig04_robot_contacts")
 
 
-def _link_colorbar(fig, axes, names: list[str]) -> None:
-    """A discrete colour bar naming the body of each line colour."""
+def _body_legend(fig, names: list[str], colors: list) -> None:
+    """One legend below the panels naming the body of each colour, head to tail."""
     if not names:
         return
-    n = len(names)
-    sm = ScalarMappable(norm=BoundaryNorm(np.arange(n + 1) + 0.5, n), cmap=ListedColormap(link_colors(n)))
-    cb = fig.colorbar(sm, ax=axes.ravel().tolist(), ticks=range(1, n + 1), aspect=40, pad=0.01)
-    cb.ax.set_yticklabels(names, fontsize=5.5)
-    cb.ax.invert_yaxis()
-    cb.set_label("body (L1..L10 numbered from the head)")
+    handles = [Line2D([], [], color=c, lw=2.0, label=n) for n, c in zip(names, colors)]
+    fig.legend(handles=handles, loc="outside lower center", ncol=len(names), handlelength=1.2,
+               columnspacing=0.9, title=f"body ({names[0]}, L1..L10 numbered from the head, {names[-1]}); "
+                                        f"forces are means over {1e3 * common.FORCE_WINDOW:g} ms")
 
 
 if __name__ == "__main__":

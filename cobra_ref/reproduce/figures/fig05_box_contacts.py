@@ -10,7 +10,8 @@ f_T. Here each gait is one row of two panels, both from ``analysis.contact_force
   with the box's weight m g dotted for reference (f_N = m g when nothing else pushes down).
 
 f_N = f . n and |f_T| = |f - f_N n| for the contact force f of the log; the magnitudes are the
-same on either body of a contact pair (action = reaction).
+same on either body of a contact pair (action = reaction). The panels of a column share one y
+scale, so the gaits compare at a glance.
 """
 
 from __future__ import annotations
@@ -22,36 +23,38 @@ from ...analysis import BOX_GROUND, ROBOT_BOX, contact_forces
 from . import common
 
 
-def plot_normal_tangential(ax, t: np.ndarray, f_N: np.ndarray, f_T: np.ndarray, color: str) -> bool:
+def plot_normal_tangential(ax, t: np.ndarray, f_N: np.ndarray, f_T: np.ndarray, color: str) -> np.ndarray:
     """f_N solid and |f_T| dashed over time [N], as means over ``common.FORCE_WINDOW`` (20 ms);
-    "no contact" and False when both are zero.
+    "no contact" when both are zero. Returns the plotted means (empty for "no contact"), for the
+    y scale.
 
     Helper: one force panel of fig. 5.
     """
     if len(t) == 0 or not (np.any(f_N) or np.any(f_T)):
         common.empty_panel(ax)
-        return False
+        return np.zeros(0)
     t_mean, f_N = common.window_mean(t, f_N)
     f_T = common.window_mean(t, f_T)[1]
     ax.plot(t_mean, f_N, color=color)
     ax.plot(t_mean, f_T, color=color, ls="--", lw=0.8)
-    ax.set_ylim(bottom=0.0)
-    common.robust_ylim(ax, np.concatenate([f_N, f_T]))
-    return True
+    return np.concatenate([f_N, f_T])
 
 
-def plot_box_ground(ax, model, traj, t: np.ndarray, color: str) -> None:
-    """Box-ground f_N and |f_T| [N] (summed over the corners) and the box's weight m g dotted.
+def plot_box_ground(ax, model, traj, t: np.ndarray, color: str) -> np.ndarray:
+    """Box-ground f_N and |f_T| [N] (summed over the corners) and the box's weight m g dotted;
+    returns the plotted means.
 
     Helper: the right-hand panel of fig. 5.
     """
     box = common.box_body(model)
     if box is None:
         common.empty_panel(ax, "no box in the model")
-        return
+        return np.zeros(0)
     bg = contact_forces(traj, BOX_GROUND, model.nb)
-    if plot_normal_tangential(ax, t, bg.normal[:, box], bg.tangential[:, box], color):
+    plotted = plot_normal_tangential(ax, t, bg.normal[:, box], bg.tangential[:, box], color)
+    if len(plotted):
         ax.axhline(-model.mass[box] * model.gravity[2], color="0.3", ls=":", lw=0.8)
+    return plotted
 
 
 def touching_links(model, in_contact: np.ndarray) -> str:
@@ -64,28 +67,34 @@ def touching_links(model, in_contact: np.ndarray) -> str:
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model) -> list[str]:
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
     """Write ``fig05_box_contacts.png/.pdf``: per gait, robot-box and box-ground normal and
     tangential forces over time.
 
     Implements: [COBRA] fig. 5 with ``analysis.contact_forces`` of kinds ROBOT_BOX and BOX_GROUND.
+    ``ensemble`` is accepted for a common signature and not drawn: the nominal runs only.
     """
     rows = common.ordered(results)
     fig = common.new_figure(common.TWO_COLUMN, 1.2 * max(len(rows), 1) + 0.5)
-    axes = fig.subplots(max(len(rows), 1), 2, sharex=True, squeeze=False)
+    axes = fig.subplots(max(len(rows), 1), 2, sharex=True, sharey="col", squeeze=False)
     if not rows:
         common.empty_panel(axes[0, 0], "no gait to show")
+    plotted = [[], []]  # per column, each row's plotted values
     for r, (gait, traj) in enumerate(rows):
         color, t = common.gait_color(gait), common.step_times(traj)
         rb = contact_forces(traj, ROBOT_BOX, model.nb)
-        if plot_normal_tangential(axes[r, 0], t, rb.normal.sum(axis=1), rb.tangential.sum(axis=1), color):
+        plotted[0].append(plot_normal_tangential(axes[r, 0], t, rb.normal.sum(axis=1), rb.tangential.sum(axis=1),
+                                                 color))
+        if len(plotted[0][-1]):
             axes[r, 0].text(0.01, 0.97, "links: " + touching_links(model, rb.in_contact),
                             transform=axes[r, 0].transAxes, va="top", fontsize=6)
-        plot_box_ground(axes[r, 1], model, traj, t, color)
+        plotted[1].append(plot_box_ground(axes[r, 1], model, traj, t, color))
         for ax in axes[r]:
             ax.set_ylabel(f"{common.gait_label(gait, traj)}\nforce [N]", color=color)
-    axes[0, 0].set_title("robot-box contact (sum over links, 20 ms means)")
-    axes[0, 1].set_title("box-ground contact (sum over corners, 20 ms means)")
+    for c, values in enumerate(plotted):
+        common.shared_force_ylim(list(axes[: len(values), c]), values)
+    axes[0, 0].set_title("robot-box contact, sum over links", loc="left")
+    axes[0, 1].set_title("box-ground contact, sum over corners", loc="left")
     _legend(fig)
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
@@ -97,7 +106,8 @@ def _legend(fig) -> None:
     handles = [Line2D([], [], color="0.2", label=r"normal $f_N$"),
                Line2D([], [], color="0.2", ls="--", lw=0.8, label=r"tangential $\|f_T\|$"),
                Line2D([], [], color="0.3", ls=":", lw=0.8, label="box weight $mg$")]
-    fig.legend(handles=handles, loc="outside upper center", ncol=3)
+    fig.legend(handles=handles, loc="outside upper center", ncol=3,
+               title=f"forces: means over {1e3 * common.FORCE_WINDOW:g} ms windows")
 
 
 if __name__ == "__main__":

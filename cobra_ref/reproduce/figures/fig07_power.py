@@ -7,54 +7,73 @@ panel per gait on a shared time axis, from ``analysis.locomotion_power``:
 * P_loc = sum_j tau_j qdot_j [W] (solid; negative when the joints brake the motion),
 * |P|_loc = sum_j |tau_j qdot_j| [W] (dashed; the power the actuators must supply),
 
-with qdot_j the joint rate at each step's midpoint; the mean and peak of |P|_loc are written in
-each panel's corner.
+with qdot_j the joint rate at each step's midpoint. Every panel has the same y scale (the paper
+compares the gaits: "the large peaks in instantaneous power from sidewinding"); a spike beyond
+it is clipped and its value written above the panel, with the mean, the 99th percentile
+(``analysis.percentile_99``) and the peak of |P|_loc.
 """
 
 from __future__ import annotations
 
-from ...analysis import locomotion_power
+import numpy as np
+
+from ...analysis import locomotion_power, percentile_99
 from . import common
 
 
-def plot_power(ax, traj, color: str) -> None:
-    """P_loc solid and |P|_loc dashed over time [W], with mean and peak |P| written in the panel.
+def power_note(P_abs: np.ndarray, clipped: bool) -> str:
+    """The numbers above a panel, e.g. "|P|: mean 3.1, p99 9.2, peak 9.5 W (clipped)".
+
+    Helper: fig. 7's annotation (mean, 99th percentile and peak of |P|_loc [W]).
+    """
+    if not len(P_abs):
+        return ""
+    text = f"|P|: mean {P_abs.mean():.3g}, p99 {percentile_99(P_abs):.3g}, peak {P_abs.max():.3g} W"
+    return text + (" (clipped)" if clipped else "")
+
+
+def plot_power(ax, traj, color: str) -> np.ndarray:
+    """P_loc solid and |P|_loc dashed over time [W]; returns |P|_loc (empty: "no steps").
 
     Helper: one panel of fig. 7.
     """
     t = common.step_times(traj)
     if len(t) == 0:
         common.empty_panel(ax, "no steps")
-        return
+        return np.zeros(0)
     P, P_abs = locomotion_power(traj)
     t_plot, P_plot = common.minmax_decimate(t, P)
     ax.plot(t_plot, P_plot, color=color, label=r"$P_{loc}$")
     t_plot, A_plot = common.minmax_decimate(t, P_abs)
     ax.plot(t_plot, A_plot, color=color, ls="--", lw=0.7, label=r"$|P|_{loc}$")
     ax.axhline(0.0, color="0.5", lw=0.5)
-    common.robust_ylim(ax, P_abs, unit="W", quantile=0.995)
-    ax.set_title(f"mean |P| {P_abs.mean():.3g} W, peak |P| {P_abs.max():.3g} W", loc="right",
-                 fontsize=6, pad=2)
+    return P_abs
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model) -> list[str]:
-    """Write ``fig07_power.png/.pdf``: P_loc (solid) and |P|_loc (dashed) [W] per gait over time.
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
+    """Write ``fig07_power.png/.pdf``: P_loc (solid) and |P|_loc (dashed) [W] per gait over time,
+    on one y scale.
 
-    Implements: [COBRA] fig. 7 with ``analysis.locomotion_power``.
+    Implements: [COBRA] fig. 7 with ``analysis.locomotion_power``. ``ensemble`` is accepted for a
+    common signature and not drawn: the nominal runs only.
     """
     rows = common.ordered(results)
-    fig = common.new_figure(common.ONE_COLUMN, 0.95 * max(len(rows), 1) + 0.6)
-    axes = fig.subplots(max(len(rows), 1), 1, sharex=True, squeeze=False)[:, 0]
+    fig = common.new_figure(common.ONE_COLUMN, 0.95 * max(len(rows), 1) + 0.8)
+    axes = fig.subplots(max(len(rows), 1), 1, sharex=True, sharey=True, squeeze=False)[:, 0]
     if not rows:
         common.empty_panel(axes[0], "no gait to show")
+    P_abs = []
     for ax, (gait, traj) in zip(axes, rows):
         color = common.gait_color(gait)
-        plot_power(ax, traj, color)
+        P_abs.append(plot_power(ax, traj, color))
         ax.set_ylabel(f"{common.gait_label(gait, traj)}\npower [W]", color=color)
+    clipped = common.robust_ylim(list(axes[: len(rows)]), P_abs, quantile=0.995)
+    for ax, values, peak in zip(axes, P_abs, clipped):
+        common.note_above(ax, power_note(values, peak is not None))
     fig.suptitle("Instantaneous locomotion power")
     if rows:
-        axes[0].legend(loc="upper left", ncol=2)
+        fig.legend(handles=axes[0].get_lines()[:2], loc="outside lower center", ncol=2)
     axes[-1].set_xlabel("time [s]")
     return common.save(fig, out_dir, "fig07_power")
 
