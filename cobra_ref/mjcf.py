@@ -1,21 +1,45 @@
 """MJCF export of a cobra_ref Model, written with xml.etree only (mujoco is not needed to write it).
 
+Implements: the MuJoCo twin of the model, with the compliant contact law (assumptions A12, A13,
+A22), the position servo (A7) and the mapping of assumption A27 ([MJ] = MuJoCo documentation,
+"Computation" / "Parameters" and "Modeling" / "Solver parameters", "Contact parameters").
+
 Conventions, and where MuJoCo differs from cobra_ref:
 
 * bodies, joints and the order of q / qd are identical: a free body's ``<freejoint/>`` has
   qpos = [x y z qw qx qy qz] and qvel = [world linear velocity, BODY angular velocity], which
-  is cobra_ref's convention, so q and qd are passed to MuJoCo unchanged;
+  is cobra_ref's convention (A19), so q and qd are passed to MuJoCo unchanged;
 * spatial vectors: MuJoCo's ``cvel``/``cacc`` are angular-first like ours but expressed at the
   subtree COM in world axes; the cross-checks compare generalized quantities (M, qfrc_bias,
   point Jacobians, poses), which need no conversion;
 * ``<compiler angle="radian"/>`` and w-first quaternions are written explicitly (MJCF's
-  default unit is degrees);
-* every body has an explicit ``<inertial>`` (MuJoCo must not infer inertia from geoms);
-* contact: MuJoCo's contact is soft (solref/solimp), cobra_ref's compliant or rigid (compliance.py).
-  ``solref`` (time constant 4 ms = 4 dt, critical damping) is chosen as stiff as MuJoCo's
-  stability rule (time constant >= 2 dt) comfortably allows; compare rollouts in bands.
-* contact filtering: robot spheres touch the ground and the box, never each other; the box
-  touches the ground (contype/conaffinity bits 1 = robot, 2 = environment).
+  default unit is degrees); every body has an explicit ``<inertial>``;
+* joints: the servo is a ``<position>`` actuator with kp = ``model.servo_kp``, kv =
+  ``model.servo_kd`` and force range +-tau_max (A7); the joint range is written but not
+  enforced (``limited="false"``), as in cobra_ref, where A4 bounds the references, not the
+  dynamics;
+* contact: one explicit ``<pair>`` per pair of geoms that may touch (robot sphere-ground,
+  robot sphere-box, box-ground; the geoms themselves have contype = conaffinity = 0), so each
+  pair gets exactly its coefficient of friction (MuJoCo would otherwise combine two geoms'
+  frictions by their maximum) and its own solref (``pair_parameters``).
+
+The contact mapping (A27, ``docs/mujoco.md``). MuJoCo's force on a constraint row obeys
+R f = a_ref - a_c ([MJ] "Parameters"), with the regularizer R = (1 - d) / d A_hat, the impedance
+d (``solimp``), A_hat MuJoCo's approximation of the row's inverse mass, and the reference
+acceleration a_ref = -b v - k r; in the direct solref format (-stiffness, -damping) with a
+constant impedance d, b = damping / d and k = stiffness / d. Hence, on a normal row
+(r: the signed distance, v its rate)::
+
+    f = -(damping v + stiffness r) / ((1 - d) A_hat)  -  d / (1 - d) a_c / A_hat
+
+With d = ``IMPEDANCE`` (MuJoCo's smallest, 1e-4), stiffness = k (1 - d) A_hat and
+damping = c (1 - d) A_hat, this is f = -k r - c v, cobra_ref's spring-damper (A12), up to the
+last term, 1e-4 of the contact's acceleration times 1 / A_hat (0 at rest; below 1 % of the force
+at accelerations of 1e4 m/s^2). A_hat is MuJoCo's ``body_invweight0`` sum of the pair's bodies, which
+``inverse_weights`` computes from our own M and Jacobians, so the force does not depend on the
+true effective mass. The friction rows of the elliptic cone (condim 3) have R_T = R / impratio;
+with ``IMPRATIO`` they are hard (R_T << A_TT) and their slip decays at the rate b_T = mu g / v_s,
+the rate at which A13's sticking branch stops a body that rests on its contacts.
 """
 
 from __future__ import annotations
@@ -24,8 +48,18 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from .dynamics import crba
+from .kinematics import forward_kinematics, point_jacobian
 from .model import Model
 from .quaternion import rot_to_quat
+from .robots import neutral_q
+
+IMPEDANCE = 1e-4  # d: MuJoCo's smallest impedance (mjMINIMP); its force is then the spring-damper's (A27)
+IMPRATIO = 1e6  # R_T = R / IMPRATIO: hard friction rows, the cone keeps the normal force (A27)
+TIMESTEP = 1e-4  # [s] MuJoCo integrates the contact force explicitly; measured in docs/mujoco.md (A27)
+GROUND = "ground"
+_AXIS = {"Rx": "1 0 0", "Ry": "0 1 0", "Rz": "0 0 1"}
+_NO_COLLISION = {"contype": "0", "conaffinity": "0"}  # every contact comes from an explicit <pair>
 
 
 def _f(x) -> str:
@@ -33,20 +67,15 @@ def _f(x) -> str:
     return " ".join(repr(float(v)) for v in np.atleast_1d(x))
 
 
-_AXIS = {"Rx": "1 0 0", "Ry": "0 1 0", "Rz": "0 0 1"}
-# contact bits: robot geoms (1) touch environment geoms (2); the box (2) also touches the ground
-_ROBOT_BITS = {"contype": "1", "conaffinity": "2"}
-_GROUND_BITS = {"contype": "2", "conaffinity": "3"}
-_BOX_BITS = {"contype": "2", "conaffinity": "3"}
+def to_mjcf(model: Model, timestep: float = TIMESTEP) -> str:
+    """MJCF XML string of ``model``: same bodies, inertials, joints, contact geoms, servo and contact law.
 
-
-def to_mjcf(model: Model, timestep: float = 1e-3, kp: float = 100.0, kv: float = 2.0) -> str:
-    """MJCF XML string of ``model``: same bodies, inertials, joints, contact geoms, actuators.
-
-    Helper: the MuJoCo cross-check's model ([MJ] XML reference). Position actuators (gains ``kp``,
-    ``kv``, force range +-tau_limit) drive every revolute joint; assumption A7 gives the range.
-    ``timestep`` [s] must be finite and within the rule ``validation.RULES["timestep"]`` (at most
-    half the contact time constant of 4 ms); a ``ValidationError`` names the value otherwise.
+    Implements: the MuJoCo twin of the module docstring (assumption A27): position actuators
+    kp = ``model.servo_kp``, kv = ``model.servo_kd``, |force| <= tau_max (A7); elliptic cone,
+    condim 3, one ``<pair>`` per touching pair with ``pair_parameters``; integrator implicitfast
+    (kv implicit). ``timestep`` [s] must be finite and within ``validation.RULES["timestep"]``
+    (a ``ValidationError`` names the value otherwise); the default ``TIMESTEP`` is the one
+    measured stable and converged for COBRA and the box (``docs/mujoco.md``).
     """
     from .validation import RULES
 
@@ -54,17 +83,11 @@ def to_mjcf(model: Model, timestep: float = 1e-3, kp: float = 100.0, kv: float =
     root = ET.Element("mujoco", model=model.name)
     root.append(ET.Comment(" written by cobra_ref.mjcf.to_mjcf; q/qd order identical to cobra_ref "))
     ET.SubElement(root, "compiler", angle="radian", autolimits="true", inertiafromgeom="false")
-    ET.SubElement(root, "option", timestep=_f(timestep), gravity=_f(model.gravity), cone="pyramidal",
-                  integrator="implicitfast")
-    default = ET.SubElement(root, "default")
-    ET.SubElement(default, "geom", friction=_f([model.mu, 0.005, 0.0001]), solref="0.004 1", condim="3")
+    ET.SubElement(root, "option", timestep=_f(timestep), gravity=_f(model.gravity), cone="elliptic",
+                  impratio=_f(IMPRATIO), integrator="implicitfast")
     world = ET.SubElement(root, "worldbody")
-    # per-pair friction through MuJoCo's default rule (the max of the two geoms' coefficients):
-    # ground mu, robot and box geoms mu_robot_box (<= mu) -> robot-ground and box-ground get mu,
-    # robot-box gets mu_robot_box, as in cobra_ref's contact solve
-    ET.SubElement(world, "geom", name="ground", type="plane", size="0 0 1", **_GROUND_BITS)
+    ET.SubElement(world, "geom", name=GROUND, type="plane", size="0 0 1", **_NO_COLLISION)
     ET.SubElement(world, "light", pos="0 0 3", dir="0 0 -1", directional="true")
-
     elements = []
     for i in range(model.nb):
         parent_el = world if model.parent[i] < 0 else elements[model.parent[i]]
@@ -76,41 +99,101 @@ def to_mjcf(model: Model, timestep: float = 1e-3, kp: float = 100.0, kv: float =
         ET.SubElement(body, "inertial", pos=_f(model.com[i]), mass=_f(model.mass[i]),
                       fullinertia=_f([I_com[0, 0], I_com[1, 1], I_com[2, 2], I_com[0, 1], I_com[0, 2], I_com[1, 2]]))
         _add_geoms(body, model, i)
-
-    actuator = ET.SubElement(root, "actuator")
-    for i, jt in enumerate(model.joint_type):
-        if jt != "free":
-            lim = model.tau_limit[i]
-            extra = {"forcerange": _f([-lim, lim])} if np.isfinite(lim) else {}
-            ET.SubElement(actuator, "position", name=f"act_{model.joint_names[i]}", joint=model.joint_names[i],
-                          kp=_f(kp), kv=_f(kv), **extra)
+    _add_actuators(ET.SubElement(root, "actuator"), model)
+    contact = ET.SubElement(root, "contact")
+    for geom1, geom2, params in pair_parameters(model):
+        ET.SubElement(contact, "pair", geom1=geom1, geom2=geom2, **params)
     ET.indent(root)
     return ET.tostring(root, encoding="unicode")
 
 
 def _add_joint(body: ET.Element, model: Model, i: int) -> None:
+    """Body i's joint: a free joint, or a hinge whose range is recorded but not enforced (A4)."""
     jt = model.joint_type[i]
     if jt == "free":
         ET.SubElement(body, "freejoint", name=model.joint_names[i])
         return
     lim = model.q_limit[i]
-    extra = {"range": _f([-lim, lim])} if np.isfinite(lim) else {}
+    extra = {"range": _f([-lim, lim]), "limited": "false"} if np.isfinite(lim) else {}
     ET.SubElement(body, "joint", name=model.joint_names[i], type="hinge", axis=_AXIS[jt], **extra)
 
 
 def _add_geoms(body: ET.Element, model: Model, i: int) -> None:
     """Contact spheres of body i (named sphere_{i}_{k}), its box, and a visual-only cylinder."""
-    mine = np.flatnonzero(model.spheres.body == i)
-    friction = {"friction": _f([min(model.mu_rb, model.mu), 0.005, 0.0001])}
-    for k, s in enumerate(mine):
+    for k, s in enumerate(np.flatnonzero(model.spheres.body == i)):
         ET.SubElement(body, "geom", name=f"sphere_{i}_{k}", type="sphere", size=_f(model.spheres.radius[s]),
-                      pos=_f(model.spheres.center[s]), **_ROBOT_BITS, **friction)
+                      pos=_f(model.spheres.center[s]), **_NO_COLLISION)
     for box in model.boxes:
         if box.body == i:
-            ET.SubElement(body, "geom", name=f"box_{i}", type="box", size=_f(box.half), **_BOX_BITS, **friction)
+            ET.SubElement(body, "geom", name=f"box_{i}", type="box", size=_f(box.half), **_NO_COLLISION)
     cyl = model.visual_cylinders[i] if i < len(model.visual_cylinders) else None
     if cyl is not None:
         length, radius, x_c = cyl
         ET.SubElement(body, "geom", name=f"visual_{i}", type="cylinder", size=_f(radius), group="1",
-                      fromto=_f([x_c - length / 2, 0, 0, x_c + length / 2, 0, 0]), contype="0",
-                      conaffinity="0", mass="0", rgba="0.3 0.5 0.8 0.3")
+                      fromto=_f([x_c - length / 2, 0, 0, x_c + length / 2, 0, 0]), mass="0",
+                      rgba="0.3 0.5 0.8 0.3", **_NO_COLLISION)
+
+
+def _add_actuators(actuator: ET.Element, model: Model) -> None:
+    """One position actuator per hinge: force = kp (ctrl - q) - kv qd, clipped to +-tau_max (A7)."""
+    for i, jt in enumerate(model.joint_type):
+        if jt == "free":
+            continue
+        lim = model.tau_limit[i]
+        extra = {"forcelimited": "true", "forcerange": _f([-lim, lim])} if np.isfinite(lim) else {}
+        ET.SubElement(actuator, "position", name=f"act_{model.joint_names[i]}", joint=model.joint_names[i],
+                      kp=_f(model.servo_kp), kv=_f(model.servo_kd), **extra)
+
+
+def inverse_weights(model: Model) -> np.ndarray:
+    """(nb,) each body's translational inverse weight at qpos0: MuJoCo's ``body_invweight0[:, 0]`` [1/kg].
+
+    Implements: MuJoCo's diagonal approximation A_hat of a contact row's inverse mass ([MJ]
+    "Parameters", "Diagonal approximation"): for body i, the mean of the diagonal of
+    J_i M^-1 J_i^T, with J_i the (3, nv) Jacobian of its centre of mass, at zero joint angles
+    (MuJoCo's qpos0; a rigid motion of the whole leaves it unchanged). A contact row between
+    bodies a and b then has A_hat = w_a + w_b (the ground: 0).
+    """
+    q = neutral_q(model)
+    kin = forward_kinematics(model, q)
+    M = crba(model, q)
+    w = np.zeros(model.nb)
+    for i in range(model.nb):
+        J_i = point_jacobian(model, q, i, model.com[i], kin)
+        # w_i = trace(J_i M^-1 J_i^T) / 3
+        w[i] = np.trace(J_i @ np.linalg.solve(M, J_i.T)) / 3.0
+    return w
+
+
+def pair_parameters(model: Model) -> list[tuple[str, str, dict]]:
+    """(geom1, geom2, attributes) of every ``<pair>``: robot sphere-ground, robot sphere-box, box-ground.
+
+    Implements: the contact mapping of assumption A27 (module docstring), per pair with
+    A_hat = w_a + w_b (``inverse_weights``) and the pair's mu (A13: ``model.mu`` with the
+    ground, A22: ``model.mu_rb`` between robot and box)::
+
+        solimp         = (d, d, 0.001, 0.5, 2)                     # constant impedance d
+        solref         = (-k (1 - d) A_hat, -c (1 - d) A_hat)       # normal: f = -k r - c v
+        solreffriction = (0, -d mu g / v_s)                          # friction: b_T = mu g / v_s
+        friction       = (mu, mu, 0, 0, 0), condim 3
+
+    with k, c = ``model.contact_stiffness``, ``model.contact_damping``, v_s =
+    ``model.stiction_velocity`` and g = |``model.gravity``|.
+    """
+    w = inverse_weights(model)
+    sphere_geoms = [(int(b), f"sphere_{b}_{int(np.sum(model.spheres.body[:s] == b))}")
+                    for s, b in enumerate(model.spheres.body)]
+    pairs = [(GROUND, name, w[b], model.mu) for b, name in sphere_geoms]
+    for box in model.boxes:
+        pairs += [(f"box_{box.body}", name, w[b] + w[box.body], model.mu_rb) for b, name in sphere_geoms]
+        pairs.append((GROUND, f"box_{box.body}", w[box.body], model.mu))
+    return [(geom1, geom2, _pair_attributes(model, A_hat, mu)) for geom1, geom2, A_hat, mu in pairs]
+
+
+def _pair_attributes(model: Model, A_hat: float, mu: float) -> dict:
+    """The attributes of one pair with inverse weight A_hat and friction mu (``pair_parameters``)."""
+    d, g = IMPEDANCE, float(np.linalg.norm(model.gravity))
+    b_T = mu * g / model.stiction_velocity
+    return {"condim": "3", "friction": _f([mu, mu, 0.0, 0.0, 0.0]),
+            "solref": _f([-model.contact_stiffness * (1 - d) * A_hat, -model.contact_damping * (1 - d) * A_hat]),
+            "solreffriction": _f([0.0, -d * b_T]), "solimp": _f([d, d, 0.001, 0.5, 2.0])}

@@ -261,8 +261,8 @@ RULES = {
                      why="at most 10^6 steps of the largest dt", note="a whole number of steps of dt, at most 10^6 steps"),
     "margin": Rule("margin", "m", 0.0, 1.0, why="the contact search margin (A16: 1 cm)"),
     "timestep": Rule("timestep", "s", 1e-6, 2e-3,
-                     why="MuJoCo's timestep; the exported contact time constant (solref 4 ms) must be at least "
-                         "two timesteps, or MuJoCo silently softens the contact"),
+                     why="MuJoCo's timestep; MuJoCo integrates the exported stiff contact explicitly, stable below "
+                         "about 0.2 ms with the box (docs/mujoco.md, A27)"),
     # friction, the box and its placement
     "mu": Rule("mu", "-", 0.0, 2.0, why=MU_WHY),
     "mu_robot_box": Rule("mu_robot_box", "-", 0.0, 2.0, why=MU_WHY + "; A22: 0.5"),

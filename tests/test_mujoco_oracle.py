@@ -113,8 +113,8 @@ def test_exported_joint_ranges_and_actuator_force_limits(cobra, mj):
 
 
 def test_exported_contact_pairs_have_the_same_friction_as_the_contact_solve(cobra, mj):
-    """MuJoCo combines two geoms' friction by their max: ground mu = 1, robot and box geoms
-    mu_robot_box = 0.5 -> robot-ground and box-ground 1.0, robot-box 0.5 (assumption A22)."""
+    """Each pair of geoms has its own <pair> (assumption A27), so the contacts MuJoCo finds carry
+    exactly the contact solve's coefficients: robot-ground and box-ground 1.0, robot-box 0.5 (A22)."""
     from cobra_ref.gaits import RollingGait
     from cobra_ref.start import placed_state
 

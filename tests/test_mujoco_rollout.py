@@ -1,145 +1,229 @@
-"""MuJoCo rollouts of the exported model as worked examples (compared in bands, not equality).
+"""MuJoCo rollouts of the exported model beside ours, as worked examples (``reproduce.mujoco_check``).
 
-The box at rest must stay at rest, the kinematic servo must follow the reference, and a C roll
-must push the box in MuJoCo; ``compare`` then reports how it agrees with our simulator.
+The servo law MuJoCo applies is ours by construction, our settled start is MuJoCo's rest, the
+robot alone travels alike in both, the box ensembles overlap, and the rules that judge the
+comparisons give the hand answers on hand-made cases.
 """
 
 import importlib
 import inspect
+import re
 import sys
 
 import numpy as np
 import pytest
 
 import cobra_ref as cr
-from cobra_ref.reproduce import mujoco_check as mr
+from cobra_ref.executors import SerialExecutor
 from cobra_ref.gaits import gait
+from cobra_ref.reproduce import mujoco_check as mc
 from cobra_ref.simulate import simulate
-from cobra_ref.start import placed_state
+from cobra_ref.start import initial_state
 
-mujoco = pytest.importorskip("mujoco")
+mujoco = pytest.importorskip("mujoco", reason="the MuJoCo comparison needs the optional dependency mujoco")
 
 
 def _hold(q_ref0):
-    """A reference that holds the shape q_ref0: no actuation change."""
+    """A reference that holds the shape q_ref0."""
     zero = np.zeros_like(q_ref0)
     return lambda t: (q_ref0, zero, zero)
 
 
-@pytest.mark.parametrize("mode", mr.MODES)
-def test_box_resting_beside_a_still_robot_stays_put_in_mujoco(cobra, mode):
-    """Gravity only, robot holding its start shape: the box (0.5 kg on mu = 1) has no horizontal
-    load, so it must not slide; MuJoCo's soft contact lets it sink by a_u (1 - d) tau_c^2 ~ 1e-5 m
-    ([MJ] "Reference": r = a_u (1 - d) timeconst^2 dampratio^2, a_u = g, d >= 0.9, tau_c = 4 ms)."""
+def test_the_actuator_force_is_our_servo_law(cobra_robot, rng):
+    """With ctrl = q_ref + (kv / kp) qd_ref, MuJoCo's position actuator applies
+    clip(kp (q_ref - q) + kd (qd_ref - qd), +-tau_max), kp = 500, kd = 5, tau_max = 9.2 (A7), at
+    random states and references, half of them beyond the torque limit."""
+    m = mujoco.MjModel.from_xml_string(cr.to_mjcf(cobra_robot))
+    d = mujoco.MjData(m)
+    hinge_q = [cobra_robot.q_idx[i].start for i, jt in enumerate(cobra_robot.joint_type) if jt != "free"]
+    hinge_v = [cobra_robot.v_idx[i].start for i, jt in enumerate(cobra_robot.joint_type) if jt != "free"]
+    for _ in range(5):
+        q, qd = cr.random_state(cobra_robot, rng, scale=0.5)
+        q_ref, qd_ref = q[hinge_q] + rng.normal(size=11) * 0.02, rng.normal(size=11)
+        d.qpos[:], d.qvel[:], d.ctrl[:] = q, qd, mc.servo_control(cobra_robot, q_ref, qd_ref)
+        mujoco.mj_forward(m, d)
+        tau = cobra_robot.servo_kp * (q_ref - q[hinge_q]) + cobra_robot.servo_kd * (qd_ref - qd[hinge_v])
+        np.testing.assert_allclose(d.actuator_force, np.clip(tau, -9.2, 9.2), rtol=1e-12, atol=1e-12)
+
+
+def test_our_settled_start_is_at_rest_in_mujoco(cobra):
+    """Our settled start (A25: the robot holding its C shape beside the box, every coordinate
+    slower than 1 cm/s) is a rest of the same law in MuJoCo: holding the shape for 0.5 s, no
+    coordinate of either simulator moves by more than 1 mm or 1 mrad (the leftover speed, under
+    1 cm/s and decaying, and our stick-slip creep, under v_s = 1 mm/s (A13), allow 0.5 mm: no fall,
+    no slide); the start goes into MuJoCo unchanged and MuJoCo raises no warning."""
     reference = gait("C")
-    q0 = placed_state(cobra, reference)
-    res = mr.rollout(cobra, _hold(reference(0.0)[0]), q0, 1.0, mode=mode)
-    box = cobra.boxes[0]
+    q0, qd0 = initial_state(cobra, reference)
+    hold = _hold(reference(0.0)[0])
+    res = mc.rollout(cobra, hold, q0, 0.5, qd0=qd0)
+    ours = simulate(cobra, hold, 0.5, q0=q0, qd0=qd0)
     np.testing.assert_array_equal(res.qpos[0], q0, err_msg="the initial state goes into MuJoCo unchanged")
-    assert np.linalg.norm(res.box_displacement) < 1e-3, res.box_displacement
-    sink = box.half[2] - res.box_pose[-1, 2]
-    assert 0.0 <= sink < 1e-4, f"box sinks {sink} m"
-    np.testing.assert_allclose(np.abs(res.box_pose[-1, 3:] @ q0[cobra.q_idx[box.body]][3:]), 1.0, atol=1e-6,
-                               err_msg="box orientation changed")
+    drift = {"MuJoCo": np.abs(res.qpos - q0).max(), "ours": np.abs(ours.q - q0).max()}
+    print(f"\nlargest drift of a coordinate over 0.5 s: MuJoCo {drift['MuJoCo']:.2e}, ours {drift['ours']:.2e}")
+    assert drift["MuJoCo"] < 1e-3 and drift["ours"] < 1e-3, drift
     assert res.n_warnings == 0
+    assert res.qpos.shape == (5001, cobra.nq) and res.t[-1] == pytest.approx(0.5)
 
 
-@pytest.mark.parametrize("name", ["C", "sidewinding"])
-def test_kinematic_mode_joint_angles_equal_the_reference(cobra, name):
-    """The equality-row servo tracks theta_ref to within 1e-4 rad at every step, contacts
-    included (measured ~1.3e-5). Without its velocity shift it would lag by 2 tau_c theta_dot_ref
-    ~ 6e-3 rad (module docstring), so this tolerance tests the shift too."""
-    reference = gait(name)
-    q0 = placed_state(cobra, reference)
-    res = mr.rollout(cobra, reference, q0, 1.5, mode="kinematic")
-    hinges = [cobra.q_idx[i].start for i, jt in enumerate(cobra.joint_type) if jt != "free"]
-    q_ref = np.array([reference(t)[0] for t in res.t])
-    np.testing.assert_allclose(res.qpos[:, hinges], q_ref, atol=1e-4, rtol=0,
-                               err_msg=f"{name}: joints leave the reference")
-    assert res.max_tracking_error < 1e-4
-    np.testing.assert_allclose(res.t[-1], 1.5, atol=1e-12)
-    assert res.qpos.shape == (1501, cobra.nq) and res.box_pose.shape == (1501, 7)
-
-
-def test_j_mirror_pushes_the_box_along_the_mirror_image_of_j(cobra):
-    """Symmetry: J-mirror is J reflected in the robot's vertical plane y = 0 (gaits docstring), and
-    so is its start state (robot on the x axis, box on the reflected concave side). The laws of
-    motion and the ground are invariant under the reflection, so the box's path must be J's with
-    y -> -y. MuJoCo keeps this to 1e-11 m over 2 s of pushing; asserted to 1e-6 m."""
+def test_j_mirror_travels_along_the_mirror_image_of_j(cobra_robot):
+    """Symmetry: J-mirror is J reflected in the vertical plane y = 0 (gaits docstring), and so is
+    its start; the laws of motion, the ground and the export are invariant under the reflection,
+    so MuJoCo's robot path must be J's with y -> -y (asserted to 1e-6 m over 1 s)."""
     paths = {}
     for name in ("J", "J-mirror"):
         reference = gait(name)
-        q0 = placed_state(cobra, reference)
-        paths[name] = mr.rollout(cobra, reference, q0, 2.0).box_pose[:, :2]
-    assert np.linalg.norm(paths["J"][-1] - paths["J"][0]) > mr.MIN_DISPLACEMENT, "J does not push the box"
-    np.testing.assert_allclose(paths["J-mirror"], paths["J"] * [1.0, -1.0], atol=1e-6, rtol=0,
-                               err_msg="J-mirror's box path is not J's reflected in y = 0")
+        q0, qd0 = initial_state(cobra_robot, reference)
+        res = mc.rollout(cobra_robot, reference, q0, 1.0, qd0=qd0)
+        paths[name] = np.array([mc.robot_com(cobra_robot, q) for q in res.qpos[::100]])
+    assert np.linalg.norm(paths["J"][-1] - paths["J"][0]) > 1e-3, "J does not move the robot"
+    np.testing.assert_allclose(paths["J-mirror"], paths["J"] * [1.0, -1.0], atol=1e-6, rtol=0)
 
 
-def test_compare_worked_examples():
-    """Hand-solvable: 30 deg apart and twice as far holds; 60 deg apart or 4x as far does not;
-    both below the 5 mm floor agree; one below it does not."""
-    c = np.cos(np.radians(30)), np.sin(np.radians(30))
-    r = mr.compare((0.1, 0.0), (0.2 * c[0], 0.2 * c[1]))
-    assert r["angle_deg"] == pytest.approx(30.0) and r["ratio"] == pytest.approx(2.0) and r["holds"]
-    assert not mr.compare((0.1, 0.0), (0.05, 0.05 * np.sqrt(3)))["holds"]  # 60 deg
-    assert not mr.compare((0.1, 0.0), (0.4, 0.0))["holds"]  # ratio 4
-    assert not mr.compare((0.1, 0.0), (0.03, 0.0))["holds"]  # ratio 0.3 < 1/3
-    assert mr.compare((0.001, 0.0), (0.0, -0.002))["holds"]
-    r = mr.compare((0.1, 0.0), (0.0, 0.0))
-    assert not r["holds"] and np.isnan(r["angle_deg"]) and r["ratio"] == 0.0
+class _Counting(SerialExecutor):
+    """A serial executor that counts what it is given."""
+
+    submitted = 0
+
+    def submit(self, fn, /, *args, **kwargs):
+        self.submitted += 1
+        return super().submit(fn, *args, **kwargs)
 
 
-@pytest.fixture(scope="module")
-def c_roll_2s():
-    """Our simulator and MuJoCo (kinematic servo), the same 2 s of C rolling from the same state."""
-    model = cr.cobra_model()
-    reference = gait("C")
-    q0 = placed_state(model, reference)
-    ours = simulate(model, reference, 2.0, q0=q0)
-    return ours, mr.rollout(model, reference, q0, 2.0, mode="kinematic")
+def test_the_robot_alone_travels_alike_in_both_simulators():
+    """The requirement: C rolling, robot alone, 3 s (``TRAVEL_DURATION``) from the same settled
+    start: the travel of the centre of mass agrees within 10 % (measured 1.5 %, 0.5 degree:
+    docs/mujoco.md), the robot travels more than 10 cm (the band is then above creep), MuJoCo
+    tracks the reference to a few hundredths of a radian and raises no warning; our run went
+    through the executor passed in."""
+    executor = _Counting()
+    (row,) = mc.robot_travel_rows(["C"], executor=executor)
+    print(f"\nC, robot alone, {row['duration']} s: ours {np.round(row['ours'], 4)} m, MuJoCo "
+          f"{np.round(row['mujoco'], 4)} m, {100 * row['relative']:.2f} %, {row['angle_deg']:.2f} deg")
+    assert executor.submitted == 1
+    assert row["kind"] == "travel" and row["duration"] == mc.TRAVEL_DURATION
+    assert row["ours_length"] > 0.1
+    assert row["holds"] and row["relative"] <= mc.TRAVEL_BAND, row
+    assert row["max_tracking_error"] < 0.05 and row["n_warnings"] == 0
 
 
-def test_c_rolling_moves_the_box_in_mujoco_and_compare_reports(c_roll_2s):
-    """The C roll reaches the box within 2 s in both simulators and pushes it along the ground.
+def test_c_box_ensembles_overlap(cobra):
+    """Three starts of C with the box 3, 5 and 7 mm from the middle link (A9's 5 cm shortened so
+    that the roll reaches it within 1 s), the last with 0.8 times the friction: ours and MuJoCo's
+    box displacements after 1 s. The box is pushed in both (every member more than the 5 mm
+    resolution), and the ensembles overlap by the stated rule."""
+    reference, duration = gait("C"), 1.0
+    members = []
+    for gap, mu_scale in ((0.003, 1.0), (0.005, 1.0), (0.007, 0.8)):
+        model = mc.scaled_friction(cobra, mu_scale)
+        q0, qd0 = initial_state(model, reference, box_gap=gap)
+        traj = simulate(model, reference, duration, q0=q0, qd0=qd0)
+        members.append({"reference": reference, "q0": q0, "qd0": qd0, "mu_scale": mu_scale,
+                        "ours": traj.box_pose[-1, :2] - traj.box_pose[0, :2]})
+    (row,) = mc.box_ensemble_rows({"C": members}, duration)
+    print(f"\nC ensembles: ours {np.round(row['ours'], 4).tolist()}, MuJoCo {np.round(row['mujoco'], 4).tolist()}; "
+          f"{row['reason']}")
+    assert row["kind"] == "box" and row["n_members"] == 3 and row["mu_scale"] == [1.0, 1.0, 0.8]
+    assert np.all(np.linalg.norm(row["mujoco"], axis=1) > mc.RESOLUTION)
+    assert np.all(np.linalg.norm(row["ours"], axis=1) > mc.RESOLUTION)
+    assert row["holds"], row["reason"]
 
-    Asserted: both move the box more than the 5 mm floor; in MuJoCo it stays on the ground, with
-    sub-mm penetration; the two push directions agree within the 45 deg band, because the
-    direction is set by geometry both share (box on the concave side, the same roll). The
-    magnitude ratio (the contact-law-sensitive part, ``compare`` Notes) is printed, not asserted."""
-    ours, mj = c_roll_2s
-    d_ours = ours.box_pose[-1, :2] - ours.box_pose[0, :2]
-    report = mr.compare(d_ours, mj.box_displacement)
-    print(f"\nC rolling, 2 s: ours {np.round(d_ours, 4)} m, MuJoCo {np.round(mj.box_displacement, 4)} m; "
-          f"angle {report['angle_deg']:.1f} deg, ratio {report['ratio']:.2f}, holds {report['holds']} "
-          f"({report['reason']}); MuJoCo max penetration {mj.max_penetration * 1000:.2f} mm, "
-          f"{mj.mean_contacts:.1f} contacts per step, {mj.wall_time:.2f} s wall")
-    assert not ours.error
-    assert np.linalg.norm(mj.box_displacement) > mr.MIN_DISPLACEMENT
-    assert abs(mj.box_pose[-1, 2] - mj.box_pose[0, 2]) < 2e-3, "the box left the ground"
-    assert 0.0 < mj.max_penetration < 1e-3
-    assert np.linalg.norm(d_ours) > mr.MIN_DISPLACEMENT
-    assert report["angle_deg"] <= mr.MAX_ANGLE_DEG, report["reason"]
-    assert np.isfinite(report["ratio"])
-    assert set(report) >= {"angle_deg", "ratio", "holds", "band"}
+
+def test_compare_travel_worked_examples():
+    """Hand-solvable: 5 % longer holds; 15 % shorter does not; the same length 90 degrees apart
+    differs by sqrt(2) of it and does not; no travel on either side holds."""
+    r = mc.compare_travel((0.2, 0.0), (0.21, 0.0))
+    assert r["relative"] == pytest.approx(0.05) and r["angle_deg"] == pytest.approx(0.0) and r["holds"]
+    assert not mc.compare_travel((0.2, 0.0), (0.17, 0.0))["holds"]
+    r = mc.compare_travel((0.2, 0.0), (0.0, 0.2))
+    assert r["relative"] == pytest.approx(np.sqrt(2)) and r["angle_deg"] == pytest.approx(90.0) and not r["holds"]
+    assert mc.compare_travel((0.0, 0.0), (0.0, 0.0))["holds"]
+    assert not mc.compare_travel((0.0, 0.0), (0.01, 0.0))["holds"]
+
+
+def test_ensembles_overlap_worked_examples():
+    """Hand-solvable cases of the rule (5 mm resolution). Members 100 mm long at +-10 degrees: the
+    arc's half-width is 10 + asin(5 / 100) = 12.87 degrees. The same ensemble overlaps itself;
+    lengths 100-110 mm and 125-130 mm (more than 10 mm apart) do not; 100 mm at 0 and at 30
+    degrees do not (the arcs' half-widths 2.87 each < 30); at 5 degrees they do; a member that
+    moves less than 5 mm points anywhere; when no member of either moves the box by more than
+    5 mm, the comparison is not tested (None), however the two agree."""
+    at = lambda length, deg: [length * np.cos(np.radians(deg)), length * np.sin(np.radians(deg))]  # noqa: E731
+    ours = [at(0.1, -10), at(0.1, 10)]
+    r = mc.ensembles_overlap(ours, ours)
+    assert r["holds"] and r["ours_direction_deg"] == pytest.approx([0.0, 10 + np.degrees(np.arcsin(0.05))])
+    assert r["ours_length"] == pytest.approx([0.095, 0.105])
+    r = mc.ensembles_overlap([at(0.1, 0), at(0.11, 0)], [at(0.125, 0), at(0.13, 0)])
+    assert not r["length_overlap"] and r["direction_overlap"] and not r["holds"]
+    r = mc.ensembles_overlap([at(0.1, 0)], [at(0.1, 30)])
+    assert r["length_overlap"] and not r["direction_overlap"] and not r["holds"]
+    assert mc.ensembles_overlap([at(0.1, 0)], [at(0.1, 5)])["holds"]
+    r = mc.ensembles_overlap([at(0.003, 0), at(0.1, 0)], [at(0.1, 3)])
+    assert r["ours_direction_deg"][1] == 180.0 and r["holds"]
+    r = mc.ensembles_overlap([at(0.003, 0)], [at(0.002, 180)])
+    assert r["holds"] is None and "not tested" in r["reason"]
+
+
+def _rows():
+    """One travel row and one box row, as the comparisons write them (hand-made numbers)."""
+    travel = {"kind": "travel", "gait": "C", "duration": 3.0, "dt": 1e-3, "timestep": 1e-4, "ours": [0.3, 0.0],
+              "mujoco": [0.29, 0.01], **mc.compare_travel((0.3, 0.0), (0.29, 0.01)), "band": mc.TRAVEL_BAND,
+              "max_penetration": 2e-5, "max_tracking_error": 0.01, "max_joint_torque": 9.2, "n_warnings": 0,
+              "ours_wall_time": 10.0, "mujoco_wall_time": 4.0}
+    ours, mj = [[0.10, 0.01], [0.11, 0.012]], [[0.2, -0.05], [0.21, -0.06]]
+    box = {"kind": "box", "gait": "J", "duration": 3.0, "timestep": 1e-4, "n_members": 2, "mu_scale": [1.0, 1.0],
+           "ours": ours, "mujoco": mj, **mc.ensembles_overlap(ours, mj), "max_penetration": 1e-4, "n_warnings": 0}
+    return [travel, box]
+
+
+def test_claims_turn_rows_into_entries():
+    """One claim per row, its id naming the comparison and the gait, its verdict the row's."""
+    travel, box = _rows()
+    claims = mc.claims([travel, box])
+    assert [c["id"] for c in claims] == ["MJ-travel-C", "MJ-box-J"]
+    assert claims[0]["holds"] is True and claims[1]["holds"] is False
+    assert "10 %" in claims[0]["claim"] and "5 mm" in claims[1]["claim"]
+    assert claims[0]["values"]["relative_difference"] == travel["relative"]
+    assert claims[1]["values"]["reason"] == box["reason"]
+
+
+def test_the_figure_draws_both_comparisons_in_words_not_dicts(tmp_path, monkeypatch):
+    """fig_mujoco_check writes PNG and PDF, one travel panel and one panel per box ensemble, and no
+    text on it is a printed Python structure (no braces, no quoted keys like 'band':)."""
+    from cobra_ref.reproduce.figures import fig_mujoco_check as fig_module
+
+    drawn, original = {}, fig_module.save
+
+    def capture(fig, out_dir, stem):
+        drawn["fig"] = fig
+        return original(fig, out_dir, stem)
+
+    monkeypatch.setattr(fig_module, "save", capture)
+    paths = fig_module.make(_rows(), str(tmp_path))
+    assert sorted(p.rsplit(".", 1)[1] for p in paths) == ["pdf", "png"]
+    fig = drawn["fig"]
+    assert len(fig.axes) == 2
+    texts = [t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text"))]
+    assert any("10 %" in t for t in texts) and any("DO NOT overlap" in t for t in texts)
+    printed = [t for t in texts if re.search(r"[{}]|'\w+':", t)]
+    assert not printed, printed
 
 
 def test_missing_mujoco_raises_a_clear_error(cobra, monkeypatch):
-    """mujoco is optional: without it the rollout says what to install, and available() is False."""
+    """mujoco is optional: without it every entry point says what to install, and available() is False."""
     monkeypatch.setitem(sys.modules, "mujoco", None)  # makes `import mujoco` raise ImportError
-    assert not mr.mujoco_available()
-    with pytest.raises(mr.MujocoUnavailable, match="pip install mujoco"):
-        mr.rollout(cobra, gait("C"), cr.neutral_q(cobra), 0.01)
-    with pytest.raises(mr.MujocoUnavailable):
-        mr.cross_check(["C"], 0.01)
+    assert not mc.mujoco_available()
+    with pytest.raises(mc.MujocoUnavailable, match="pip install mujoco"):
+        mc.rollout(cobra, gait("C"), cr.neutral_q(cobra), 0.01)
+    with pytest.raises(mc.MujocoUnavailable):
+        mc.robot_travel_rows(["C"], 0.01)
+    with pytest.raises(mc.MujocoUnavailable):
+        mc.box_ensemble_rows({}, 0.01)
 
 
-def test_bad_mode_and_mismatched_layout_are_refused(cobra, cobra_robot):
-    with pytest.raises(ValueError, match="mode"):
-        mr.servo_mjcf(cobra, 1e-3, mode="torque")
+def test_a_mismatched_layout_is_refused(cobra, cobra_robot):
     m = mujoco.MjModel.from_xml_string(cr.to_mjcf(cobra_robot))
-    with pytest.raises(mr.MujocoRolloutError, match="nq"):
-        mr._check_layout(cobra, m)
+    with pytest.raises(mc.MujocoRolloutError, match="nq"):
+        mc._check_layout(cobra, m)
 
 
 def test_public_functions_name_what_they_implement():
@@ -149,4 +233,4 @@ def test_public_functions_name_what_they_implement():
         if fname.startswith("_") or not inspect.isfunction(obj) or obj.__module__ != module.__name__:
             continue
         doc = inspect.getdoc(obj) or ""
-        assert "Implements:" in doc or "Helper:" in doc, f"mujoco_rollout.{fname}"
+        assert "Implements:" in doc or "Helper:" in doc, f"mujoco_check.{fname}"

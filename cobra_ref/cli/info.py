@@ -10,6 +10,7 @@ import sys
 
 import numpy as np
 
+from ..mjcf import TIMESTEP
 from ..params import CobraParameters, parameter_table
 from ..robots import cobra_model
 from ..validation import RULES
@@ -75,7 +76,7 @@ def add_parsers(sub) -> None:
     p = sub.add_parser("export-mjcf", help="write the model as MuJoCo MJCF XML")
     p.add_argument("out", metavar="OUT.xml", help="output file, written under exactly this name (a symbolic link: "
                                                   "its target; never a directory or a device)")
-    p.add_argument("--timestep", type=RULES["timestep"].arg("--timestep"), default=1e-3,
-                   help="MuJoCo timestep [s] (default 1e-3)")
+    p.add_argument("--timestep", type=RULES["timestep"].arg("--timestep"), default=TIMESTEP,
+                   help=f"MuJoCo timestep [s] (default {TIMESTEP:g}: the exported stiff contact needs it, A27)")
     p.add_argument("--no-box", action="store_true", help="export the robot alone")
     p.set_defaults(func=cmd_export_mjcf)

@@ -19,7 +19,8 @@ Helper: the claims report of ``cobra-ref figures`` (``claims.json`` and ``claims
   robot's start heading is +x) has opposite signs for J and J-mirror, each more than 1 mm.
 
 Each claim is a dict {id, claim, values, holds}; ``holds`` is None when a gait it needs is
-missing or its run failed (the values say why). The MuJoCo cross-check adds one entry per gait.
+missing or its run failed (the values say why). The MuJoCo comparison adds its own entries
+(``mujoco_check.claims``).
 """
 
 from __future__ import annotations
@@ -91,23 +92,6 @@ def gait_summaries(results: dict) -> dict:
         out[g]["max_penetration"] = float(np.max(traj.steps["max_penetration"], initial=0.0))
         out[g]["max_cone_residual"] = float(np.max(traj.steps["cone_residual"], initial=0.0))
         out[g]["steps_over_torque_limit"] = float(np.mean(traj.steps["tau_excess"] > 0)) if len(traj.tau) else 0.0
-    return out
-
-
-def mujoco_claims(rows: list[dict]) -> list[dict]:
-    """One claim per gait from the MuJoCo rollout cross-check rows (``mujoco_rollout``).
-
-    Helper: each row carries the gait, both displacements and the comparison with its band.
-    """
-    out = []
-    for r in rows:
-        band = r["band"]
-        text = (f"MuJoCo (soft contact, joints imposed) moves the box like cobra_ref for {r['gait']}: direction "
-                f"within {band['max_angle_deg']:g} deg, length ratio within [1/{band['max_ratio']:g}, "
-                f"{band['max_ratio']:g}], when either moves it {1000 * band['min_displacement']:g} mm or more")
-        keys = ("ours_displacement", "mujoco_displacement", "angle_deg", "ratio", "reason", "max_penetration")
-        out.append({"id": f"MJC-{r['gait']}", "claim": text, "values": {k: r.get(k) for k in keys},
-                    "holds": r["holds"]})
     return out
 
 

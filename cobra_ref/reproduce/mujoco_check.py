@@ -1,65 +1,56 @@
-"""MuJoCo rollouts of the exported model: does MuJoCo push the box the same way we do?
+"""MuJoCo compared with cobra_ref like for like: the same model, contact law, servo and start.
 
-Implements: the rollout cross-check with MuJoCo ("a gait rollout in MuJoCo moves
-the box the same way within a stated tolerance band"), on the MJCF of :func:`cobra_ref.mjcf.to_mjcf`.
-[MJ] = MuJoCo documentation, "Computation" (soft constraints, eq. aref) and "XML Reference"
-(actuator/position, equality/joint), as shipped with mujoco 4.0 in ``mujoco/doc``.
+Implements: the MuJoCo comparison of ``docs/mujoco.md``. MuJoCo runs the MJCF of
+:func:`cobra_ref.mjcf.to_mjcf`, whose contact is our spring-damper with Coulomb's circle (the
+mapping of assumption A27) and whose joints are the position servo of A7, from our own settled
+start (A25). [MJ] = MuJoCo documentation, "Computation" and "XML Reference" (actuator/position).
 
-MuJoCo's qpos / qvel layout is cobra_ref's (free joint 7 + 11 hinges + box free joint 7; nv = 23),
-so ``q0`` from :func:`cobra_ref.simulate.initial_state` goes in unchanged; ``rollout`` checks the
-joint addresses of the compiled model against ``model.q_idx`` / ``model.v_idx`` before it starts.
+MuJoCo's qpos / qvel layout is cobra_ref's (A19: free joint 7 + 11 hinges, the box's free joint
+7; nv = 23 with the box), so a start (q0, qd0) goes in unchanged; ``rollout`` checks the joint
+addresses of the compiled model against ``model.q_idx`` / ``model.v_idx`` before it starts.
 
-Two ways to drive the 11 joints (``mode``):
+The servo. MuJoCo's position actuator applies clip(kp (ctrl - q) - kv qd, +-tau_max) ([MJ]
+actuator/position: gainprm = kp, biasprm = (0, -kp, -kv)); with ctrl = q_ref + (kv / kp) qd_ref
+this is kp (q_ref - q) + kv (qd_ref - qd), our servo law (A7, ``servo_control``), with the
+reference taken at the end of the step as ours is (``compliance.servo_rows``).
 
-* ``"kinematic"`` (default), the analogue of our ``StepSettings(servo="prescribed")``, which is
-  what ``cobra-ref simulate`` and the figure runs use. The position actuators are removed and
-  every hinge gets a one-joint equality constraint theta_i = a0_i (``<equality><joint>`` without
-  joint2, [MJ] XML equality/joint), whose target a0_i is moved every step. MuJoCo solves these
-  rows together with the contacts in one constraint problem, so the servo torque is a
-  constraint force, the base and the box feel its reaction, and nothing is limited by the
-  9.2 N m stall torque (as in our prescribed servo, which only reports the excess). The rows are
-  as hard as MuJoCo allows: solref = (2 dt, 1), the smallest time constant its ``refsafe`` rule
-  keeps, and impedance d = 0.9999 = mjMAXIMP. Measured: |theta - theta_ref| <= 1.3e-5 rad on
-  each of the five gaits over 2 s.
+Two comparisons, each with its band stated here, before any run:
 
-  Rejected alternatives: (a) overwriting the hinge qpos / qvel with the reference before each
-  ``mj_step`` and integrating the rest. The step's dynamics then see free, unactuated joints:
-  the overwritten joint velocity is injected without any reaction on the base. Measured on
-  C rolling over 2 s: the base moves 1 cm and the box not at all, where the equality servo
-  rolls the robot into the box and pushes it 11 cm. (b) Very stiff position actuators: the
-  stiffness kp is integrated explicitly by ``implicitfast`` (only the damping kv is implicit),
-  so kp is capped by the stability limit dt < 2 / omega, and a 9.2 N m force range would not be
-  the prescribed servo anyway.
+* ``robot_travel_rows``: the robot alone (no box), each paper gait, ``TRAVEL_DURATION`` = 3 s
+  from the same settled start in both simulators. Holds when the travel of the robot's centre
+  of mass agrees within ``TRAVEL_BAND`` = 10 %: |d_MuJoCo - d_ours| <= 0.10 |d_ours| (the
+  vector difference, so length and direction both count: 10 % allows 5.7 degrees). Why 3 s:
+  it is 1.5 periods of the 0.5 Hz gaits (A10), the one-period ramp and half a period at full
+  amplitude, and the robot then travels 0.3-0.7 m, so the band (3-7 cm) is far above settling
+  and creep (mm); over longer runs the two integrators' differences compound. Our side costs
+  about 3 ms per 1 ms step, so its runs go to any ``concurrent.futures.Executor``.
+* ``box_ensemble_rows``: the robot pushing the box, per gait an ensemble of starts (and friction
+  scales) supplied by the caller, run in MuJoCo from the same states. The ensembles overlap
+  (``ensembles_overlap``) when the lengths of the box displacements and their directions, each
+  over the members as [min, max] with every member's end point widened by ``RESOLUTION`` =
+  5 mm (5 % of the box's edge: below it a displacement is settling and creep, not a push),
+  overlap between the two simulators. Pushing a box is sensitive to where and when each link
+  meets it, so single runs may differ more than the simulators do; the ensemble's spread is
+  that sensitivity.
 
-* ``"position"``, the analogue of our ``StepSettings(servo="pd")``: the exported position
-  actuators, force = clip(kp (ctrl - theta) - kv theta_dot, +-tau_max) ([MJ] actuator/position:
-  gainprm = kp, biasprm = (0, -kp, -kv)). With ctrl = theta_ref + (kv / kp) theta_dot_ref this is
-  kp (theta_ref - theta) + kv (theta_dot_ref - theta_dot), our PD law with the velocity target,
-  with one actuator per joint. Gains default to ``to_mjcf``'s (kp = 100 N m / rad, kv = 2 N m s / rad,
-  = StepSettings.kp / kd, assumption A7); with them the C roll lags the reference by up to 0.05 rad.
-
-The comparison (``compare``) states its tolerance band and why; ``cross_check`` runs the gaits.
-mujoco is an optional dependency (the ``test`` extra): without it, ``rollout`` and
-``cross_check`` raise ``MujocoUnavailable`` saying so, and ``mujoco_available()`` is False.
+mujoco is an optional dependency (the ``test`` extra): without it ``rollout`` and the row
+functions raise ``MujocoUnavailable`` saying so, and ``mujoco_available()`` is False.
 """
 
 from __future__ import annotations
 
-import inspect
+import dataclasses
 import time
-import xml.etree.ElementTree as ET
 from typing import NamedTuple
 
 import numpy as np
 
-from ..mjcf import to_mjcf
+from ..mjcf import TIMESTEP, to_mjcf
 from ..model import Model
 
-MODES = ("kinematic", "position")
-# compare(): the tolerance band, stated before any run (see compare's docstring)
-MAX_ANGLE_DEG = 45.0
-MAX_RATIO = 3.0
-MIN_DISPLACEMENT = 0.005  # [m], 5 % of the box's edge
+TRAVEL_DURATION = 3.0  # [s] the robot-only comparison (module docstring)
+TRAVEL_BAND = 0.10  # |d_MuJoCo - d_ours| <= TRAVEL_BAND |d_ours|
+RESOLUTION = 0.005  # [m] each box displacement's end point is known to this (5 % of the box's edge)
 
 
 class MujocoUnavailable(ImportError):
@@ -71,25 +62,22 @@ class MujocoRolloutError(RuntimeError):
 
 
 class MujocoRollout(NamedTuple):
-    """What a MuJoCo rollout returns (states at the N + 1 times t_k = k dt, stats over the N steps)."""
+    """What a MuJoCo rollout returns (states at the N + 1 times t_k = k timestep, stats over the N steps)."""
 
     t: np.ndarray  # (N+1,) [s]
     qpos: np.ndarray  # (N+1, nq), cobra_ref's q layout
-    box_pose: np.ndarray  # (N+1, 7) box x y z qw qx qy qz
-    box_displacement: np.ndarray  # (2,) horizontal, box_pose[-1, :2] - box_pose[0, :2] [m]
     max_penetration: float  # max over steps of -min(mjContact.dist), >= 0 [m]
     mean_contacts: float  # mean number of MuJoCo contacts per step
-    max_tracking_error: float  # max |theta - theta_ref(t_k)| over joints and times [rad]
-    max_joint_torque: float  # max |servo torque| (kinematic: equality force, position: actuator_force) [N m]
+    max_tracking_error: float  # max |q - q_ref(t_k)| over joints and times [rad]
+    max_joint_torque: float  # max |actuator_force| [N m]
     n_warnings: int  # MuJoCo warnings raised during the run (all kinds)
     wall_time: float  # seconds spent in the stepping loop
-    mode: str
 
 
 def mujoco_available() -> bool:
     """True when ``import mujoco`` works.
 
-    Helper: lets callers skip the cross-check instead of catching ``MujocoUnavailable``.
+    Helper: lets callers skip the comparison instead of catching ``MujocoUnavailable``.
     """
     try:
         _import_mujoco()
@@ -102,38 +90,18 @@ def _import_mujoco():
     try:
         import mujoco
     except ImportError as exc:
-        raise MujocoUnavailable("the MuJoCo cross-check needs the optional dependency mujoco: "
+        raise MujocoUnavailable("the MuJoCo comparison needs the optional dependency mujoco: "
                                 "pip install mujoco (or pip install 'cobra-ref[test]')") from exc
     return mujoco
 
 
-def servo_mjcf(model: Model, dt: float, mode: str = "kinematic", kp: float | None = None,
-               kv: float | None = None) -> str:
-    """MJCF of ``model`` with the joint servo of ``mode`` (module docstring).
+def servo_control(model: Model, q_ref, qd_ref) -> np.ndarray:
+    """ctrl = q_ref + (kv / kp) qd_ref: MuJoCo's position actuators then apply our servo law.
 
-    Helper: "position" is ``to_mjcf(model, dt, kp, kv)`` unchanged; "kinematic" removes its
-    actuators and adds one equality/joint row per hinge, ``servo_<joint>``, solref = (2 dt, 1),
-    solimp = (0.9999, 0.9999, 0.001, 0.5, 2), i.e. a constant impedance d = d_width = 0.9999.
+    Implements: the position servo of assumption A7 as MuJoCo's actuator/position
+    (module docstring): kp (ctrl - q) - kv qd = kp (q_ref - q) + kv (qd_ref - qd).
     """
-    if mode not in MODES:
-        raise ValueError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
-    kp, kv = _gains(kp, kv)
-    root = ET.fromstring(to_mjcf(model, timestep=dt, kp=kp, kv=kv))
-    if mode == "kinematic":
-        root.remove(root.find("actuator"))
-        equality = ET.SubElement(root, "equality")
-        for i in _hinges(model):
-            name = model.joint_names[i]
-            ET.SubElement(equality, "joint", name=f"servo_{name}", joint1=name, polycoef="0 0 0 0 0",
-                          solref=f"{2 * dt!r} 1", solimp="0.9999 0.9999 0.001 0.5 2")
-    return ET.tostring(root, encoding="unicode")
-
-
-def _gains(kp, kv):
-    """kp, kv, or to_mjcf's defaults for the ones not given."""
-    defaults = inspect.signature(to_mjcf).parameters
-    return (defaults["kp"].default if kp is None else float(kp),
-            defaults["kv"].default if kv is None else float(kv))
+    return np.asarray(q_ref, dtype=float) + (model.servo_kd / model.servo_kp) * np.asarray(qd_ref, dtype=float)
 
 
 def _hinges(model: Model) -> list[int]:
@@ -150,179 +118,265 @@ def _check_layout(model: Model, m) -> None:
             raise MujocoRolloutError(f"joint {i} ({name}) has a different qpos/qvel address in MuJoCo")
 
 
-def rollout(model: Model, reference, q0, duration: float, dt: float = 1e-3, mode: str = "kinematic",
-            kp: float | None = None, kv: float | None = None, qd0=None) -> MujocoRollout:
-    """Roll the exported model out in MuJoCo for ``duration`` seconds with the joints driven by
-    ``reference(t) -> (q_ref, qd_ref, qdd_ref)`` (11 joints) from the state (``q0``, ``qd0`` = 0).
+def rollout(model: Model, reference, q0, duration: float, timestep: float = TIMESTEP, qd0=None) -> MujocoRollout:
+    """Roll ``to_mjcf(model, timestep)`` out in MuJoCo for ``duration`` seconds from (``q0``, ``qd0`` = 0),
+    the joints driven by ``reference(t) -> (q_ref, qd_ref, qdd_ref)``.
 
-    Implements: the MuJoCo rollout; the servos of the module docstring.
-
-    Notes
-    -----
-    Per step k (t = k dt), before ``mj_step``::
-
-        kinematic:  a0_i = theta_ref + 2 tau_c theta_dot_ref,  tau_c = 2 dt     # equality target
-                    -> aref_i = -b (theta_dot - theta_dot_ref) - k (theta - theta_ref)
-        position:   ctrl_i = theta_ref + (kv / kp) theta_dot_ref
-                    -> force_i = kp (theta_ref - theta) + kv (theta_dot_ref - theta_dot)
-
-    The kinematic target follows from [MJ] eq. (aref), aref = -b (J v) - k r with r = theta - a0,
-    and from solref = (tau_c, 1) with constant impedance d: b = 2 / (d tau_c), k = 1 / (d tau_c^2),
-    so b / k = 2 tau_c. Without the shift the row would damp theta_dot towards 0 and lag the
-    reference by 2 tau_c theta_dot_ref (6 mrad at 1.6 rad/s, measured); with it, 1e-5 rad.
+    Implements: the MuJoCo rollout of the module docstring. Per step k, before ``mj_step``,
+    ctrl = ``servo_control``(q_ref(t_k+1), qd_ref(t_k+1)). Raises ``MujocoRolloutError`` when
+    the state becomes non-finite or MuJoCo reports a bad acceleration.
     """
     mujoco = _import_mujoco()
-    if not (np.isfinite(duration) and duration > 0 and np.isfinite(dt) and dt > 0):
-        raise ValueError(f"duration and dt must be positive and finite, got {duration}, {dt}")
-    kp, kv = _gains(kp, kv)
-    m = mujoco.MjModel.from_xml_string(servo_mjcf(model, dt, mode, kp, kv))
+    if not (np.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration must be positive and finite, got {duration}")
+    m = mujoco.MjModel.from_xml_string(to_mjcf(model, timestep))
     d = mujoco.MjData(m)
     _check_layout(model, m)
     d.qpos[:] = model.check_q(np.asarray(q0, dtype=float))
     d.qvel[:] = 0.0 if qd0 is None else model.check_qd(np.asarray(qd0, dtype=float))
-    hinge_q = [model.q_idx[i].start for i in _hinges(model)]
-    box = model.q_idx[model.boxes[0].body]
-    n = int(round(duration / dt))
+    n = int(round(duration / timestep))
+    t = np.arange(n + 1) * timestep
     qpos = np.zeros((n + 1, m.nq))
     qpos[0] = d.qpos
-    stats = _Stats(mujoco)
+    stats, hinge_q = _Stats(), [model.q_idx[i].start for i in _hinges(model)]
     start = time.perf_counter()
     for k in range(n):
-        q_ref, qd_ref, _ = reference(k * dt)
-        if mode == "kinematic":
-            # equality/joint with no joint2: theta = qpos0 + a0 (qpos0 = 0 for a hinge), a0 = polycoef[0]
-            m.eq_data[:, 0] = q_ref + 2 * (2 * dt) * qd_ref
-        else:
-            d.ctrl[:] = q_ref + (kv / kp) * qd_ref
+        q_ref, qd_ref, _ = reference(t[k + 1])
+        d.ctrl[:] = servo_control(model, q_ref, qd_ref)
         mujoco.mj_step(m, d)
-        stats.add(m, d, mode)
         if not np.all(np.isfinite(d.qpos)) or d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number:
-            raise MujocoRolloutError(f"MuJoCo diverged at step {k}, t = {k * dt:.4f} s (mode {mode!r})")
+            raise MujocoRolloutError(f"MuJoCo diverged at step {k}, t = {t[k]:.4f} s (timestep {timestep:g} s)")
         qpos[k + 1] = d.qpos
-    wall = time.perf_counter() - start
-    t = np.arange(n + 1) * dt
-    q_ref_all = np.array([reference(tk)[0] for tk in t])
-    return MujocoRollout(
-        t=t, qpos=qpos, box_pose=qpos[:, box].copy(), box_displacement=qpos[-1, box][:2] - qpos[0, box][:2],
-        max_penetration=stats.max_penetration, mean_contacts=stats.contacts / max(n, 1),
-        max_tracking_error=float(np.abs(qpos[:, hinge_q] - q_ref_all).max()),
-        max_joint_torque=stats.max_torque, n_warnings=int(sum(w.number for w in d.warning)),
-        wall_time=wall, mode=mode)
+        stats.add(d, q_ref, hinge_q)
+    return MujocoRollout(t=t, qpos=qpos, max_penetration=stats.max_penetration,
+                         mean_contacts=stats.contacts / max(n, 1), max_tracking_error=stats.max_tracking,
+                         max_joint_torque=stats.max_torque, n_warnings=int(sum(w.number for w in d.warning)),
+                         wall_time=time.perf_counter() - start)
 
 
 class _Stats:
     """Running contact and servo statistics of a rollout."""
 
-    def __init__(self, mujoco):
-        self.equality = mujoco.mjtConstraint.mjCNSTR_EQUALITY
-        self.max_penetration, self.contacts, self.max_torque = 0.0, 0, 0.0
+    def __init__(self):
+        self.max_penetration, self.contacts, self.max_torque, self.max_tracking = 0.0, 0, 0.0, 0.0
 
-    def add(self, m, d, mode: str) -> None:
-        # mjContact.dist < 0 is a penetration; the contacts are those of the step's start state
+    def add(self, d, q_ref, hinge_q) -> None:
+        # mjContact.dist < 0 is a penetration (the contacts of the step's start state)
         if d.ncon:
             self.max_penetration = max(self.max_penetration, -float(d.contact.dist[:d.ncon].min()))
         self.contacts += d.ncon
-        if mode == "kinematic":  # the servo torque is the equality row's force (J = e_i for a joint row)
-            rows = d.efc_type[:d.nefc] == self.equality
-            torque = d.efc_force[:d.nefc][rows]
-        else:
-            torque = d.actuator_force
-        self.max_torque = max(self.max_torque, float(np.abs(torque).max(initial=0.0)))
+        self.max_torque = max(self.max_torque, float(np.abs(d.actuator_force).max(initial=0.0)))
+        self.max_tracking = max(self.max_tracking, float(np.abs(d.qpos[hinge_q] - q_ref).max(initial=0.0)))
 
 
-def compare(ours_displacement, mujoco_displacement, max_angle_deg: float = MAX_ANGLE_DEG,
-            max_ratio: float = MAX_RATIO, min_displacement: float = MIN_DISPLACEMENT) -> dict:
-    """Do two horizontal box displacements agree within the stated band?
+def robot_com(model: Model, q) -> np.ndarray:
+    """(2,) horizontal position of the robot's centre of mass (every body but the box) [m].
 
-    Implements: the tolerance band of the MuJoCo cross-check (compare bands, not equality).
-
-    Returns ``angle_deg`` (between the two directions; nan if either is zero), ``ratio``
-    (|mujoco| / |ours|), ``ours_norm`` and ``mujoco_norm`` [m], ``holds`` and ``reason``, and the
-    ``band`` used. The band holds when both move the box at least ``min_displacement`` and
-    angle <= ``max_angle_deg`` and 1 / ``max_ratio`` <= ratio <= ``max_ratio``, or when neither
-    does (both agree the gait does not push the box); one moving it and the other not fails.
-
-    Notes
-    -----
-    Why this band (stated before any run, not fitted to one). Everything except the contact law
-    is shared: the same bodies, inertias, kinematics and Jacobians (``test_mujoco_oracle``: equal
-    to 1e-9), the same gait, the same initial state, and a kinematic servo that tracks to 1e-5 rad.
-    What differs is contact: ours is hard, velocity-level least action with Coulomb friction on a
-    4-facet pyramid; MuJoCo's is soft (solref 4 ms, solimp 0.9-0.95: sub-mm penetration) and its
-    friction is regularized, so a contact below the friction limit still creeps.
-
-    * Direction, 45 deg: which way the box goes is set by geometry that both share (which side
-      of the robot the box is on, which way the gait rolls or travels). More than 45 deg (nearer
-      perpendicular than parallel) means the box was pushed by another part of the body or in
-      another phase: a qualitative disagreement.
-    * Magnitude, factor 3: the distance is the time integral of the box's slip, the quantity
-      most sensitive to the contact law (when each robot-box contact starts and ends, its
-      stick/slip split, and the cube sliding on mu = 1 at its tipping limit, where the split of
-      its load between corners is undetermined: README "Pushing the box"). Each push also moves
-      the box relative to the next one, so the differences compound over a run. A factor of 3
-      still separates "pushes it about as far" from "barely nudges it" or "flings it".
-    * Floor, 5 mm (5 % of the box edge): below it a direction is settling and creep, not a push.
+    Helper: the travel of the robot-only comparison, the mass-weighted mean of the bodies'
+    centres of mass, for our trajectories and MuJoCo's alike.
     """
-    d_o, d_m = np.asarray(ours_displacement, dtype=float)[:2], np.asarray(mujoco_displacement, dtype=float)[:2]
-    n_o, n_m = float(np.linalg.norm(d_o)), float(np.linalg.norm(d_m))
+    from ..kinematics import forward_kinematics
+
+    boxes = {box.body for box in model.boxes}
+    robot = [i for i in range(model.nb) if i not in boxes]
+    kin = forward_kinematics(model, q)
+    com = np.array([kin.o[i] + kin.R[i] @ model.com[i] for i in robot])
+    return np.average(com, axis=0, weights=[model.mass[i] for i in robot])[:2]
+
+
+def box_displacement(model: Model, q_start, q_end) -> np.ndarray:
+    """(2,) horizontal displacement of the box's centre between two configurations [m].
+
+    Helper: the box-ensemble comparison.
+    """
+    iq = model.q_idx[model.boxes[0].body]
+    return np.asarray(q_end, dtype=float)[iq][:2] - np.asarray(q_start, dtype=float)[iq][:2]
+
+
+def compare_travel(ours, mujoco, band: float = TRAVEL_BAND) -> dict:
+    """Do two travels of the centre of mass agree within ``band``: |d_MuJoCo - d_ours| <= band |d_ours|?
+
+    Implements: the band of the robot-only comparison (module docstring). Returns ``ours_length``,
+    ``mujoco_length`` [m], ``difference`` |d_MuJoCo - d_ours| [m], ``relative`` (difference /
+    |d_ours|; inf when ours does not move), ``angle_deg`` between the two (nan if either is zero)
+    and ``holds``.
+    """
+    d_o, d_m = np.asarray(ours, dtype=float)[:2], np.asarray(mujoco, dtype=float)[:2]
+    n_o, n_m, diff = float(np.linalg.norm(d_o)), float(np.linalg.norm(d_m)), float(np.linalg.norm(d_m - d_o))
     # cos(angle) = d_o . d_m / (|d_o| |d_m|)
     angle = float(np.degrees(np.arccos(np.clip(d_o @ d_m / (n_o * n_m), -1, 1)))) if n_o * n_m > 0 else float("nan")
-    ratio = n_m / n_o if n_o > 0 else float("inf")
-    if n_o < min_displacement and n_m < min_displacement:
-        holds, reason = True, f"neither moves the box {min_displacement * 1000:g} mm"
-    elif n_o < min_displacement or n_m < min_displacement:
-        holds, reason = False, f"only {'MuJoCo' if n_m >= min_displacement else 'ours'} moves the box"
-    else:
-        holds = angle <= max_angle_deg and 1 / max_ratio <= ratio <= max_ratio
-        reason = (f"angle {angle:.1f} deg (band <= {max_angle_deg:g}), "
-                  f"ratio {ratio:.2f} (band [1/{max_ratio:g}, {max_ratio:g}])")
-    return {"angle_deg": angle, "ratio": ratio, "ours_norm": n_o, "mujoco_norm": n_m, "holds": bool(holds),
-            "reason": reason, "band": {"max_angle_deg": max_angle_deg, "max_ratio": max_ratio,
-                                       "min_displacement": min_displacement}}
+    relative = diff / n_o if n_o > 0 else (0.0 if diff == 0 else float("inf"))
+    return {"ours_length": n_o, "mujoco_length": n_m, "difference": diff, "relative": relative,
+            "angle_deg": angle, "holds": bool(relative <= band)}
 
 
-def cross_check(gait_names, duration: float, dt: float = 1e-3, ours: dict | None = None,
-                box_directions: dict | None = None, mode: str = "kinematic", model: Model | None = None,
-                kp: float | None = None, kv: float | None = None, params: dict | None = None) -> list[dict]:
-    """For each gait: its MuJoCo rollout from our initial state, and ``compare`` against our box
-    displacement ``ours[gait] = (dx, dy)`` when the caller supplies it.
-
-    Implements: the gait-by-gait MuJoCo cross-check.
-
-    The reference is ``gaits.gait(name, **params[name])`` (the defaults without ``params``); the initial state is
-    ``simulate.initial_state(model, reference, box_direction=...)`` with ``box_directions[name]``
-    if given, else, for sidewinding, ``reproduce.travel_direction(RunSpec("sidewinding",
-    duration, dt))`` (a box-free run of our simulator, as the figure runs place it), else the
-    concave side. Pass the direction our run used (its ``meta["box_direction"]``) to skip that
-    run. Each row: gait, mode, duration, dt, box_direction, mujoco_displacement, ours_displacement
-    (or None), the MuJoCo contact / servo stats, wall_time, and the ``compare`` keys when ``ours``
-    has the gait.
-    """
+def _ours_travel(name: str, gait_params: dict, duration: float, dt: float) -> dict:
+    """Our side of one robot-only run (in a worker): the settled start and the state after ``duration``."""
     from ..gaits import gait
     from ..robots import cobra_model
+    from ..simulate import simulate
     from ..start import initial_state
+    from ..step import StepSettings
+
+    model, reference, settings = cobra_model(with_box=False), gait(name, **gait_params), StepSettings(dt=dt)
+    q0, qd0 = initial_state(model, reference, settings)
+    traj = simulate(model, reference, duration, settings, q0=q0, qd0=qd0)
+    return {"q0": q0, "qd0": qd0, "q_end": traj.q[-1], "wall_time": traj.wall_time}
+
+
+def robot_travel_rows(gaits, duration: float = TRAVEL_DURATION, executor=None, timestep: float = TIMESTEP,
+                      dt: float = 1e-3, params: dict | None = None) -> list[dict]:
+    """For each gait, the robot alone (no box): the travel of its centre of mass over ``duration``
+    in our simulator (step ``dt``) and in MuJoCo (``timestep``), from the same settled start.
+
+    Implements: the robot-only comparison of the module docstring (band ``TRAVEL_BAND``).
+    ``gaits``: names for ``gaits.gait``, with ``params[name]`` its parameters (default the
+    gait's own); our runs go to ``executor`` (any ``concurrent.futures.Executor``; default
+    serial), MuJoCo's run here. Each row: kind "travel", gait, duration, dt, timestep, ``ours``
+    and ``mujoco`` (dx, dy) [m], the ``compare_travel`` keys, ``band``, and MuJoCo's
+    max_penetration, max_tracking_error, max_joint_torque, n_warnings and wall times.
+    """
+    from ..executors import SerialExecutor
+    from ..gaits import gait
+    from ..robots import cobra_model
+
+    _import_mujoco()
+    model, params, executor = cobra_model(with_box=False), params or {}, executor or SerialExecutor()
+    futures = {name: executor.submit(_ours_travel, name, params.get(name, {}), duration, dt) for name in gaits}
+    rows = []
+    for name, future in futures.items():
+        ours = future.result()
+        res = rollout(model, gait(name, **params.get(name, {})), ours["q0"], duration, timestep, ours["qd0"])
+        d_o = robot_com(model, ours["q_end"]) - robot_com(model, ours["q0"])
+        d_m = robot_com(model, res.qpos[-1]) - robot_com(model, res.qpos[0])
+        rows.append({"kind": "travel", "gait": name, "duration": duration, "dt": dt, "timestep": timestep,
+                     "ours": [float(x) for x in d_o], "mujoco": [float(x) for x in d_m], **compare_travel(d_o, d_m),
+                     "band": TRAVEL_BAND, "max_penetration": res.max_penetration,
+                     "max_tracking_error": res.max_tracking_error, "max_joint_torque": res.max_joint_torque,
+                     "n_warnings": res.n_warnings, "ours_wall_time": ours["wall_time"],
+                     "mujoco_wall_time": res.wall_time})
+    return rows
+
+
+def scaled_friction(model: Model, mu_scale: float) -> Model:
+    """``model`` with every coefficient of friction (robot-ground, box-ground, robot-box) times ``mu_scale``.
+
+    Helper: an ensemble member's friction (``box_ensemble_rows``).
+    """
+    if mu_scale == 1.0:
+        return model
+    return dataclasses.replace(model, mu=model.mu * mu_scale, mu_robot_box=model.mu_rb * mu_scale)
+
+
+def box_ensemble_rows(members: dict, duration: float, timestep: float = TIMESTEP, model: Model | None = None) -> list[dict]:
+    """For each gait, its ensemble of box pushes in MuJoCo beside ours, and whether the two overlap.
+
+    Implements: the box-ensemble comparison of the module docstring (rule ``ensembles_overlap``).
+    ``members`` = {gait: [member, ...]}, each member a dict with ``reference`` (the joint
+    reference), ``q0`` (the start, box included; ``qd0`` optional, default 0), ``mu_scale``
+    (friction multiplier, ``scaled_friction``; 1.0 nominal) and ``ours`` (our box displacement
+    (dx, dy) [m] after ``duration``). ``model``: the robot with the box (default
+    ``cobra_model()``). Each row: kind "box", gait, duration, timestep, n_members, mu_scale,
+    ``ours`` and ``mujoco`` (the (dx, dy) of each member) [m], the ``ensembles_overlap`` keys,
+    and MuJoCo's max_penetration and n_warnings over the members.
+    """
+    from ..robots import cobra_model
 
     _import_mujoco()
     model = cobra_model() if model is None else model
-    ours, box_directions = ours or {}, box_directions or {}
     rows = []
-    for name in gait_names:
-        reference = gait(name, **(params or {}).get(name, {}))
-        direction = box_directions.get(name)
-        if direction is None and name == "sidewinding":
-            from .runs import RunSpec, travel_direction
-
-            direction = travel_direction(RunSpec("sidewinding", duration, dt))
-        q0, qd0 = initial_state(model, reference, box_direction=direction)
-        res = rollout(model, reference, q0, duration, dt, mode, kp, kv, qd0)
-        row = {"gait": name, "mode": mode, "duration": duration, "dt": dt,
-               "box_direction": None if direction is None else [float(x) for x in np.asarray(direction)[:2]],
-               "mujoco_displacement": [float(x) for x in res.box_displacement],
-               "ours_displacement": None if name not in ours else [float(x) for x in np.asarray(ours[name])[:2]],
-               "max_penetration": res.max_penetration, "mean_contacts": res.mean_contacts,
-               "max_tracking_error": res.max_tracking_error, "max_joint_torque": res.max_joint_torque,
-               "n_warnings": res.n_warnings, "wall_time": res.wall_time}
-        if name in ours:
-            row.update(compare(ours[name], res.box_displacement))
-        rows.append(row)
+    for name, ensemble in members.items():
+        mujoco_d, penetration, warnings = [], 0.0, 0
+        for member in ensemble:
+            res = rollout(scaled_friction(model, float(member.get("mu_scale", 1.0))), member["reference"],
+                          member["q0"], duration, timestep, member.get("qd0"))
+            mujoco_d.append([float(x) for x in box_displacement(model, res.qpos[0], res.qpos[-1])])
+            penetration, warnings = max(penetration, res.max_penetration), warnings + res.n_warnings
+        ours_d = [[float(x) for x in np.asarray(member["ours"], dtype=float)[:2]] for member in ensemble]
+        rows.append({"kind": "box", "gait": name, "duration": duration, "timestep": timestep,
+                     "n_members": len(ensemble), "mu_scale": [float(m.get("mu_scale", 1.0)) for m in ensemble],
+                     "ours": ours_d, "mujoco": mujoco_d, **ensembles_overlap(ours_d, mujoco_d),
+                     "max_penetration": penetration, "n_warnings": warnings})
     return rows
+
+
+def _length_interval(d: np.ndarray, resolution: float) -> tuple[float, float]:
+    """[min |d_i| - resolution, max |d_i| + resolution] over the members (lower end at least 0)."""
+    length = np.linalg.norm(d, axis=1)
+    return max(0.0, float(length.min()) - resolution), float(length.max()) + resolution
+
+
+def _direction_arc(d: np.ndarray, resolution: float) -> tuple[float, float]:
+    """(centre, half-width) [deg] of the arc of directions covered by the members' end points, each
+    widened to a disk of radius ``resolution``; a member shorter than that points anywhere (180)."""
+    length = np.linalg.norm(d, axis=1)
+    if np.any(length <= resolution):
+        return 0.0, 180.0
+    phi = np.arctan2(d[:, 1], d[:, 0])
+    mean = np.arctan2(np.sin(phi).sum(), np.cos(phi).sum())
+    # each member's angle from the mean direction, wrapped to (-pi, pi], +- the angle its disk subtends
+    rel = np.angle(np.exp(1j * (phi - mean)))
+    alpha = np.arcsin(resolution / length)
+    lo, hi = float((rel - alpha).min()), float((rel + alpha).max())
+    return float(np.degrees(mean + (lo + hi) / 2)), min(180.0, float(np.degrees((hi - lo) / 2)))
+
+
+def ensembles_overlap(ours, mujoco, resolution: float = RESOLUTION) -> dict:
+    """Do two ensembles of box displacements overlap in length and in direction?
+
+    Implements: the rule of the box-ensemble comparison (module docstring), stated before any
+    run. Every member's end point is a disk of radius ``resolution``. Length: the intervals
+    [min |d_i| - resolution, max |d_i| + resolution] of the two ensembles intersect. Direction:
+    the arcs of directions their disks cover intersect (an arc is the whole circle when a
+    member moves the box less than ``resolution``: its direction is undetermined); arcs meet
+    when the angle between their centres is at most the sum of their half-widths. The
+    ensembles overlap when both hold. When no member of either ensemble moves the box by more
+    than ``resolution`` there is nothing to compare: ``holds`` is None (not tested), so a push
+    too short to see cannot pass the check. Returns ``ours_length`` and ``mujoco_length`` (the
+    intervals) [m], ``ours_direction_deg`` and ``mujoco_direction_deg`` (centre, half-width)
+    [deg], ``length_overlap``, ``direction_overlap``, ``holds``, ``reason``, ``resolution``.
+    """
+    d_o, d_m = np.asarray(ours, dtype=float).reshape(-1, 2), np.asarray(mujoco, dtype=float).reshape(-1, 2)
+    L_o, L_m = _length_interval(d_o, resolution), _length_interval(d_m, resolution)
+    length_overlap = L_o[0] <= L_m[1] and L_m[0] <= L_o[1]
+    arc_o, arc_m = _direction_arc(d_o, resolution), _direction_arc(d_m, resolution)
+    # the angle between the arcs' centres, wrapped to [0, 180]
+    between = abs((arc_m[0] - arc_o[0] + 180.0) % 360.0 - 180.0)
+    direction_overlap = between <= arc_o[1] + arc_m[1]
+    moved = max(np.linalg.norm(d_o, axis=1).max(), np.linalg.norm(d_m, axis=1).max()) > resolution
+    holds = bool(length_overlap and direction_overlap) if moved else None
+    reason = "" if moved else "neither simulator moves the box by more than the resolution: not tested; "
+    reason += (f"length {1e3 * L_o[0]:.0f}-{1e3 * L_o[1]:.0f} mm vs {1e3 * L_m[0]:.0f}-{1e3 * L_m[1]:.0f} mm "
+              f"({'overlap' if length_overlap else 'apart'}); direction {arc_o[0]:.0f} +- {arc_o[1]:.0f} deg vs "
+              f"{arc_m[0]:.0f} +- {arc_m[1]:.0f} deg ({'overlap' if direction_overlap else 'apart'})")
+    return {"ours_length": list(L_o), "mujoco_length": list(L_m), "ours_direction_deg": list(arc_o),
+            "mujoco_direction_deg": list(arc_m), "length_overlap": bool(length_overlap),
+            "direction_overlap": bool(direction_overlap), "holds": holds,
+            "reason": reason, "resolution": resolution}
+
+
+def claims(rows: list[dict]) -> list[dict]:
+    """Claim entries {"id", "claim", "values", "holds"} from robot-travel and box-ensemble rows.
+
+    Helper: the MuJoCo part of the claims report; ids "MJ-travel-<gait>" and "MJ-box-<gait>".
+    """
+    return [_travel_claim(r) if r["kind"] == "travel" else _box_claim(r) for r in rows]
+
+
+def _travel_claim(r: dict) -> dict:
+    text = (f"MuJoCo (the same contact law, servo and start) moves the robot alone like cobra_ref for {r['gait']}: "
+            f"over {r['duration']:g} s its centre of mass travels within {100 * r['band']:g} % "
+            f"(|d_MuJoCo - d_ours| <= {r['band']:g} |d_ours|)")
+    values = {"ours_travel_m": r["ours"], "mujoco_travel_m": r["mujoco"], "relative_difference": r["relative"],
+              "angle_deg": r["angle_deg"], "mujoco_max_penetration_m": r["max_penetration"]}
+    return {"id": f"MJ-travel-{r['gait']}", "claim": text, "values": values, "holds": r["holds"]}
+
+
+def _box_claim(r: dict) -> dict:
+    text = (f"MuJoCo's and cobra_ref's ensembles of box pushes overlap for {r['gait']} ({r['n_members']} members, "
+            f"{r['duration']:g} s): the lengths and the directions of the box displacements, each member's end "
+            f"point widened by {1e3 * r['resolution']:g} mm")
+    values = {"ours_length_m": r["ours_length"], "mujoco_length_m": r["mujoco_length"],
+              "ours_direction_deg": r["ours_direction_deg"], "mujoco_direction_deg": r["mujoco_direction_deg"],
+              "reason": r["reason"]}
+    return {"id": f"MJ-box-{r['gait']}", "claim": text, "values": values, "holds": r["holds"]}

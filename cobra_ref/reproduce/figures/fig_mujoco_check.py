@@ -1,56 +1,107 @@
-"""The MuJoCo rollout cross-check as a picture: each gait's box displacement, ours and MuJoCo's.
+"""The MuJoCo comparison as a picture: the robot's travel without the box, and the box ensembles.
 
-Helper: the figure of the MuJoCo cross-check (``mujoco_rollout.cross_check``):
-one arrow per simulator and gait from the box's start, in the robot's start frame (head at the
-origin facing +x), with the angle between the two and the ratio of their lengths; the caption
-states the tolerance band (``mujoco_rollout.compare``).
+Helper: the figure of ``reproduce.mujoco_check``. Top: for each gait, the travel of the robot's
+centre of mass (no box) in cobra_ref and in MuJoCo, as bars of its length with the relative
+difference |d_MuJoCo - d_ours| / |d_ours| and the verdict against the 10 % band written above
+them. Bottom: one panel per gait of the box ensembles, each member's box displacement as a dot
+(cobra_ref and MuJoCo), with the length and direction ranges of the overlap rule and its
+verdict. The rules are stated in words under the panels.
 """
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
+from matplotlib.patches import Wedge
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-from .common import save  # noqa: E402
+from .common import TWO_COLUMN, new_figure, ordered, paper_style, save
 
 STEM = "fig_mujoco_check"
+OURS, MUJOCO = "tab:blue", "tab:orange"
 
 
+@paper_style
 def make(rows: list[dict], out_dir: str) -> list[str]:
-    """Write ``fig_mujoco_check.png`` / ``.pdf`` from the cross-check rows; return the paths.
+    """Write ``fig_mujoco_check.png`` / ``.pdf`` from the rows of ``robot_travel_rows`` and
+    ``box_ensemble_rows`` (either may be missing); return the paths.
 
-    Helper: the cross-check figure (module docstring).
+    Helper: the MuJoCo comparison figure (module docstring).
     """
-    n = max(len(rows), 1)
-    fig, axes = plt.subplots(1, n, figsize=(1.6 * n + 0.6, 2.6), squeeze=False)
-    for ax, row in zip(axes[0], rows):
-        ours, mj = row.get("ours_displacement"), row["mujoco_displacement"]
-        lim = 1.15 * max([abs(v) for v in (*mj, *(ours or (0.0, 0.0)))] + [0.005])
-        if ours is not None:
-            ax.annotate("", xy=ours, xytext=(0, 0), arrowprops=dict(arrowstyle="->", color="tab:blue", lw=1.8))
-        ax.annotate("", xy=mj, xytext=(0, 0), arrowprops=dict(arrowstyle="->", color="tab:orange", lw=1.8))
-        ax.set_xlim(-lim, lim)
-        ax.set_ylim(-lim, lim)
-        ax.set_aspect("equal")
-        ax.axhline(0, color="0.85", lw=0.6)
-        ax.axvline(0, color="0.85", lw=0.6)
-        ax.set_xlabel("box dx [m]")
-        verdict = "" if "holds" not in row else ("agree" if row["holds"] else "DIFFER")
-        extra = "" if "angle_deg" not in row or row["angle_deg"] is None else \
-            f"\n{row['angle_deg']:.0f} deg, x{row['ratio']:.2f}"
-        ax.set_title(f"{row['gait']}: {verdict}{extra}", fontsize=8)
-        ax.tick_params(labelsize=7)
-    axes[0][0].set_ylabel("box dy [m]")
-    axes[0][0].plot([], [], color="tab:blue", label="cobra_ref (rigid)")
-    axes[0][0].plot([], [], color="tab:orange", label="MuJoCo (soft)")
-    fig.legend(loc="lower center", ncol=2, fontsize=7, frameon=False)
-    band = rows[0].get("band", "") if rows else ""
-    fig.suptitle(f"Box displacement over {rows[0]['duration']:g} s, MuJoCo vs cobra_ref" if rows else "", fontsize=9)
-    if band:
-        fig.text(0.5, 0.09, f"band: {band}", ha="center", fontsize=6, wrap=True)
-    fig.tight_layout(rect=(0, 0.14, 1, 0.95))
-    paths = save(fig, out_dir, STEM)
-    plt.close(fig)
-    return paths
+    travel = [r for r in rows if r["kind"] == "travel"]
+    boxes = dict(ordered({r["gait"]: r for r in rows if r["kind"] == "box"}))
+    n_box = len(boxes)
+    fig = new_figure(TWO_COLUMN, 2.3 + (2.0 if n_box else 0.0))
+    grid = fig.add_gridspec(2 if n_box else 1, max(n_box, 1), height_ratios=[1.0, 1.1] if n_box else [1.0])
+    if travel:
+        _travel_panel(fig.add_subplot(grid[0, :]), travel)
+    for k, row in enumerate(boxes.values()):
+        ax = fig.add_subplot(grid[1 if travel else 0, k])
+        _box_panel(ax, row)
+        if k == 0:
+            ax.legend(loc="upper left", fontsize=5.5)
+    fig.suptitle(_caption(travel, list(boxes.values())), fontsize=6.5)
+    return save(fig, out_dir, STEM)
+
+
+def _caption(travel: list[dict], boxes: list[dict]) -> str:
+    """The two rules in words, one line each."""
+    lines = []
+    if travel:
+        r = travel[0]
+        lines.append(f"Robot alone, {r['duration']:g} s from the same settled start: holds when "
+                     f"|d_MuJoCo - d_ours| <= {100 * r['band']:g} % of |d_ours| (centre-of-mass travel).")
+    if boxes:
+        r = boxes[0]
+        lines.append(f"Box ensembles, {r['duration']:g} s: overlap when the ranges of length and of direction "
+                     f"meet, each member's end point widened by {1e3 * r['resolution']:g} mm.")
+    return "\n".join(lines)
+
+
+def _travel_panel(ax, rows: list[dict]) -> None:
+    """Grouped bars of the travel length per gait, with the relative difference and the verdict above."""
+    rows = [r for _, r in ordered({r["gait"]: r for r in rows})]
+    x = np.arange(len(rows))
+    ax.bar(x - 0.18, [r["ours_length"] for r in rows], 0.36, color=OURS, label="cobra_ref")
+    ax.bar(x + 0.18, [r["mujoco_length"] for r in rows], 0.36, color=MUJOCO, label="MuJoCo")
+    top = max(max(r["ours_length"], r["mujoco_length"]) for r in rows)
+    for xi, r in zip(x, rows):
+        verdict = "holds" if r["holds"] else "FAILS"
+        ax.text(xi, max(r["ours_length"], r["mujoco_length"]) + 0.03 * top,
+                f"{100 * r['relative']:.1f} %, {r['angle_deg']:.1f} deg\n{verdict}", ha="center", va="bottom",
+                fontsize=6)
+    ax.set_xticks(x, [r["gait"] for r in rows])
+    ax.set_ylim(0, 1.3 * top)
+    ax.set_ylabel("travel of the centre of mass [m]")
+    ax.legend(loc="upper left", ncol=2)
+
+
+def _box_panel(ax, row: dict) -> None:
+    """The members' box displacements (marks), zoomed on their end points, with the ranges of the
+    overlap rule (shaded ring sectors: length interval x arc of directions) and their numbers."""
+    d_o, d_m = np.array(row["ours"]).reshape(-1, 2), np.array(row["mujoco"]).reshape(-1, 2)
+    for (lo, hi), (centre, half), color in ((row["ours_length"], row["ours_direction_deg"], OURS),
+                                            (row["mujoco_length"], row["mujoco_direction_deg"], MUJOCO)):
+        ax.add_patch(Wedge((0, 0), 1e3 * hi, centre - half, centre + half, width=1e3 * (hi - lo), color=color,
+                           alpha=0.15, lw=0))
+    ax.plot(*(1e3 * d_o.T), "o", color=OURS, ms=3, label="cobra_ref")
+    ax.plot(*(1e3 * d_m.T), "x", color=MUJOCO, ms=4, label="MuJoCo")
+    # a square window around every end point, 3 resolutions wide at least
+    ends = 1e3 * np.vstack([d_o, d_m])
+    centre, half = (ends.max(axis=0) + ends.min(axis=0)) / 2, max(np.ptp(ends, axis=0).max() / 2, 0.0)
+    half += 3e3 * row["resolution"]
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_aspect("equal")
+    ax.set_xlabel("box dx from its start [mm]")
+    ax.set_ylabel("box dy [mm]")
+    ax.text(0.98, 0.03, "\n".join(_ranges(row)), transform=ax.transAxes, ha="right", va="bottom", fontsize=5.5)
+    verdict = {True: "overlap", False: "DO NOT overlap", None: "box barely moves, not tested"}[row["holds"]]
+    ax.set_title(f"{row['gait']}: {row['n_members']} members, {verdict}", fontsize=7)
+
+
+def _ranges(row: dict) -> list[str]:
+    """One line per simulator: its length interval [mm] and arc of directions [deg]."""
+    lines = []
+    for who, key in (("cobra_ref", "ours"), ("MuJoCo", "mujoco")):
+        (lo, hi), (centre, half) = row[f"{key}_length"], row[f"{key}_direction_deg"]
+        lines.append(f"{who}: {1e3 * lo:.0f}-{1e3 * hi:.0f} mm, {centre:.0f} +- {half:.0f} deg")
+    return lines
