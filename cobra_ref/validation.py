@@ -292,6 +292,13 @@ RULES = {
     "scenario_duration": Rule("duration", "s", 0.0, 60.0, low_open=True, why="each scenario of the sweep"),
     "count": Rule("count", "-", 1, 100_000, kind="int"),
     "gait_param": Rule("gait parameter", "-", why="the gait checks its own range"),
+    # replaying and rendering a run (viz.render checks the same ranges for API callers)
+    "speed": Rule("speed", "-", 0.0, 100.0, low_open=True, why="simulated seconds per shown second"),
+    "fps": Rule("fps", "1/s", 0.0, 120.0, low_open=True, why="video frames per second; a GIF plays at most 50"),
+    "at": Rule("at", "s", 0.0, MAX_STEPS * DT_MAX, why="the time of a still frame, within the run"),
+    "width": Rule("width", "px", 16, 1920, kind="int", why="MuJoCo's offscreen framebuffer"),
+    "height": Rule("height", "px", 16, 1080, kind="int", why="MuJoCo's offscreen framebuffer"),
+    "force_scale": Rule("force_scale", "m/N", 0.0, 1.0, low_open=True, why="the length of a force arrow per newton"),
 }
 RULES["box_offset_pair"] = PairRule("box_offset", RULES["box_offset"], ("DX", "DY"))
 RULES["goal_pair"] = PairRule("goal", RULES["goal"], ("X", "Y"))

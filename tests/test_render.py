@@ -249,21 +249,25 @@ def test_view_without_a_display_says_so_and_suggests_render(run, monkeypatch):
     (["render", "{run}", "--out", "{tmp}/x.txt"], "unknown output format"),
     (["render", "{run}", "--out", "{tmp}/x.gif", "--at", "0.1"], "still frame"),
     (["render", "{run}", "--out", "{tmp}/x.png", "--at", "3"], "outside the run"),
-    (["render", "{run}", "--out", "{tmp}/x.gif", "--fps", "0"], "fps must be positive"),
+    (["render", "{run}", "--out", "{tmp}/x.gif", "--fps", "0"], "--fps = 0 1/s is out of range (allowed: (0, 120]"),
     (["render", "{run}", "--out", "{tmp}/x.gif", "--fps", "60"], "at most 50 frames"),
-    (["render", "{run}", "--out", "{tmp}/x.png", "--width", "5000"], "width must be"),
+    (["render", "{run}", "--out", "{tmp}/x.png", "--width", "5000"], "--width = 5000 px is out of range"),
+    (["render", "{run}", "--out", "{tmp}/x.png", "--width", "6.5"], "--width"),
+    (["view", "{run}", "--speed", "-1"], "--speed = -1 is out of range"),
     (["render", "{run}", "--out", "{tmp}/nope/x.png"], "output directory does not exist"),
     (["render", "{tmp}/missing.npz", "--out", "{tmp}/x.png"], "no such run file"),
     (["render", "{tmp}/bad.npz", "--out", "{tmp}/x.png"], "not a readable NPZ"),
     (["view", "{tmp}/missing.npz"], "no such run file"),
 ])
-def test_bad_input_names_the_problem_and_writes_nothing(run, tmp_path, args, message):
+def test_bad_input_names_the_problem_and_writes_nothing(run, tmp_path, capsys, args, message):
+    """Each bad input exits with a message that names it (argparse's range errors on stderr,
+    exit status 2; the renderer's own checks in the exit message), and nothing is written."""
     path, _ = run
     (tmp_path / "bad.npz").write_text("not an npz")
     argv = [a.format(run=path, tmp=tmp_path) for a in args]
     with pytest.raises(SystemExit) as exc:
         main(argv)
-    assert message in str(exc.value.code)
+    assert message in str(exc.value.code) + capsys.readouterr().err
     assert not any(p.name.startswith("x.") or p.name.startswith(".tmp_") for p in tmp_path.iterdir())
 
 

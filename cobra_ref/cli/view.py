@@ -8,11 +8,11 @@ and OpenGL backend, how long it took) on stdout and its progress on stderr.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 
-from .common import check_out, finite_float
+from ..validation import RULES
+from .common import check_out
 
 
 def read_run(path: str):
@@ -38,10 +38,6 @@ def cmd_view(args) -> int:
     """
     from ..viz import view
 
-    if not (args.speed > 0):
-        raise SystemExit(f"error: --speed must be positive, got {args.speed}")
-    if not (args.force_scale > 0):
-        raise SystemExit(f"error: --force-scale must be positive, got {args.force_scale}")
     traj = read_run(args.run)
     try:
         import mujoco  # noqa: F401
@@ -93,17 +89,6 @@ def cmd_render(args) -> int:
     return 0
 
 
-def pixels(text: str) -> int:
-    """argparse type: a whole number of pixels (the renderer checks the range).
-
-    Helper: the command line (cobra-ref render).
-    """
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number of pixels: {text!r}") from None
-
-
 def add_parsers(sub) -> None:
     """The ``view`` and ``render`` subcommands.
 
@@ -117,11 +102,11 @@ def add_parsers(sub) -> None:
                                    "points and force arrows of its contact log (green robot-ground, red robot-box, "
                                    "blue box-ground), the box's path and the time. Space pauses.")
     p.add_argument("run", metavar="RUN.npz", help="a run written by cobra-ref simulate --out")
-    p.add_argument("--speed", type=finite_float, default=1.0,
+    p.add_argument("--speed", type=RULES["speed"].arg("--speed"), default=1.0,
                    help="replay speed: 1 = real time (default), 0.25 = four times slower")
     p.add_argument("--once", action="store_true", help="stop on the last state instead of starting again")
     p.add_argument("--no-follow", action="store_true", help="keep the camera where it is (default: follow the robot)")
-    p.add_argument("--force-scale", type=finite_float, default=FORCE_SCALE,
+    p.add_argument("--force-scale", type=RULES["force_scale"].arg("--force-scale"), default=FORCE_SCALE,
                    help=f"arrow length per newton [m/N] (default {FORCE_SCALE:g})")
     p.set_defaults(func=cmd_view)
 
@@ -132,14 +117,14 @@ def add_parsers(sub) -> None:
                                    "box in view. MP4 needs the optional extra: pip install 'cobra-ref[video]'.")
     r.add_argument("run", metavar="RUN.npz", help="a run written by cobra-ref simulate --out")
     r.add_argument("--out", required=True, metavar="FILE", help="FILE.mp4, FILE.gif, or FILE.png (a still)")
-    r.add_argument("--at", type=finite_float, default=None,
+    r.add_argument("--at", type=RULES["at"].arg("--at"), default=None,
                    help="time of the still [s] from the run's start (PNG only; default: the last state)")
-    r.add_argument("--fps", type=finite_float, default=30.0, help="video frames per second (default 30)")
-    r.add_argument("--speed", type=finite_float, default=1.0,
+    r.add_argument("--fps", type=RULES["fps"].arg("--fps"), default=30.0, help="video frames per second (default 30)")
+    r.add_argument("--speed", type=RULES["speed"].arg("--speed"), default=1.0,
                    help="simulated seconds per video second (default 1; 0.25 = slow motion)")
-    r.add_argument("--width", type=pixels, default=640, help="image width [px] (default 640)")
-    r.add_argument("--height", type=pixels, default=480, help="image height [px] (default 480)")
-    r.add_argument("--force-scale", type=finite_float, default=FORCE_SCALE,
+    r.add_argument("--width", type=RULES["width"].arg("--width"), default=640, help="image width [px] (default 640)")
+    r.add_argument("--height", type=RULES["height"].arg("--height"), default=480, help="image height [px] (default 480)")
+    r.add_argument("--force-scale", type=RULES["force_scale"].arg("--force-scale"), default=FORCE_SCALE,
                    help=f"arrow length per newton [m/N] (default {FORCE_SCALE:g})")
     r.add_argument("--renderer", choices=("auto", "mujoco", "matplotlib"), default="auto",
                    help="auto (default): MuJoCo if an OpenGL backend works, else matplotlib")
