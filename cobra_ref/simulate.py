@@ -51,7 +51,7 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
     if q0 is None:
         q0, qd0 = initial_state(model, reference, settings, box_offset, box_direction=box_direction)
     q, qd = model.check_q(q0).copy(), model.check_qd(np.zeros(model.nv) if qd0 is None else qd0).copy()
-    _check_start(model, q)
+    check_start(model, q)
     advance = _stepper(model, settings, stepper)
     log = _Log(model, n_steps, settings.dt)
     log.add_state(0.0, q, qd)
@@ -121,8 +121,12 @@ def meta(model: Model, settings: StepSettings, advance) -> dict:
             "phase_seconds": dict(getattr(owner, "timing", {}))}
 
 
-def _check_start(model: Model, q) -> None:
-    """Refuse a start deeper than MAX_START_PENETRATION in the ground or the box, naming the body."""
+def check_start(model: Model, q) -> None:
+    """Refuse a start deeper than MAX_START_PENETRATION in the ground or the box, naming the body.
+
+    Helper: ``simulate`` checks its start with it; the command line checks a placement before
+    it settles.
+    """
     contacts = find_contacts(model, q, 0.0)
     if contacts.m and contacts.g.min() < -MAX_START_PENETRATION:
         k = int(np.argmin(contacts.g))

@@ -96,13 +96,13 @@ def _cobra_parameters(args) -> CobraParameters:
 def _start(model, reference, settings, args):
     """(q0, qd0): the placed and settled start with the box options (``start.initial_state``); a
     placement deep in the ground or the box is refused before it settles."""
-    from ..simulate import _check_start
+    from ..simulate import check_start
     from ..start import initial_state, placed_state
     from ..step import SimulationError
 
     gap = 0.05 if args.box_gap is None else args.box_gap
     try:
-        _check_start(model, placed_state(model, reference, args.box_offset, gap, box_yaw=args.box_yaw))
+        check_start(model, placed_state(model, reference, args.box_offset, gap, box_yaw=args.box_yaw))
     except SimulationError as exc:
         hint = "; place the box elsewhere with --box-offset DX,DY or --box-gap" if "robot-box" in str(exc) else ""
         raise fail(f"{exc}{hint}") from None
