@@ -276,6 +276,7 @@ def test_not_tested_without_a_gait_or_a_statistic():
     for cid in ("WB", "EN", "PP", "SP", "SL"):
         assert c[cid]["verdict"] == "not tested" and c[cid]["holds"] is None, cid
     assert c["E"]["verdict"] == "not tested"
+    assert c["WB"]["values"]["C"]["mean"] == pytest.approx(1.035)  # the gaits there still shown
     assert c["MJ"]["verdict"] == "holds"
     e = ensemble(change=lambda g, s: [s.pop("power_cv"), s.pop("goal_direction")])
     c = by_id(ensemble_claims(e))

@@ -4,7 +4,7 @@ Helper: the claims report of ``cobra-ref figures`` (``claims.json`` and ``claims
 
 [COBRA] gives no numbers, only plots and sentences (sec. "Results", figs. 6-9; assumption A21).
 Each claim below is a statistic of ``analysis.summary`` and a condition on it, with its
-threshold fixed here, before any result:
+threshold fixed here, before any result (assumption A30):
 
 * E  "the S and J shape lateral rolling gaits perform more efficiently than other gaits": the
   efficiency slope dW_loc / dW_box (``efficiency_slope``, fig. 6; lower = more efficient) of S
@@ -72,6 +72,7 @@ comparison adds its own entries (``mujoco_check.claims``).
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numpy as np
 
@@ -120,6 +121,18 @@ def _scenarios(ensemble: dict, gaits, keys) -> list[int]:
     return [i for i in range(n) if all(_ok(ensemble[g][i], keys) for g in gaits)]
 
 
+def _own_values(ensemble: dict, gaits, key: str, statistic=None) -> dict:
+    """{gait: mean and spread} of ``statistic(summary)`` (default ``summary[key]``) over each gait's
+    own usable members: the numbers shown when no scenario has every gait."""
+    statistic = statistic or (lambda s: s[key])
+    out = {}
+    for g in gaits:
+        v = [statistic(s) for s in ensemble.get(g, []) if _ok(s, [key])]
+        if v:
+            out[g] = _stats(v)
+    return out
+
+
 def _stats(values) -> dict:
     v = [float(x) for x in values if not (isinstance(x, float) and math.isnan(x))]
     if not v:
@@ -131,14 +144,15 @@ def verdict(n: int, n_holds: int) -> tuple:
     """(holds, verdict) of a claim that held for ``n_holds`` of ``n`` members.
 
     Helper: the 80/20 rule of the module docstring: holds when n_holds >= 0.8 n, does not hold
-    when n_holds <= 0.2 n (compared in integers, 5 n_holds >= 4 n and 5 n_holds <= n), undecided
-    between, not tested when n = 0.
+    when n_holds <= 0.2 n (``HOLDS_AT``, ``FAILS_AT``; compared as exact fractions, so 4 of 5 is
+    80 %), undecided between, not tested when n = 0.
     """
     if n == 0:
         return None, "not tested"
-    if 5 * n_holds >= 4 * n:
+    share = Fraction(n_holds, n)
+    if share >= Fraction(HOLDS_AT).limit_denominator(100):
         return True, "holds"
-    if 5 * n_holds <= n:
+    if share <= Fraction(FAILS_AT).limit_denominator(100):
         return False, "does not hold"
     return None, "undecided"
 
@@ -163,9 +177,10 @@ def _rank(ensemble, cid, text, key, winner=SIDEWINDING, largest=True):
     gaits = list(ensemble)
     failed = _failed_runs(ensemble, gaits)
     if winner not in ensemble or len(gaits) < 2:
-        return _entry(cid, text, {}, [], failed, reason=f"needs {winner} and another gait")
+        return _entry(cid, text, _own_values(ensemble, gaits, key), [], failed,
+                      reason=f"needs {winner} and another gait")
     idx = _scenarios(ensemble, gaits, [key])
-    values = {g: _stats([ensemble[g][i][key] for i in idx]) for g in gaits}
+    values = {g: _stats([ensemble[g][i][key] for i in idx]) for g in gaits} if idx else _own_values(ensemble, gaits, key)
     results = []
     for i in idx:
         w = ensemble[winner][i][key]
@@ -182,7 +197,8 @@ def _efficiency(ensemble):
     gaits = better + worse
     failed = _failed_runs(ensemble, gaits)
     idx = _scenarios(ensemble, gaits, ["efficiency_slope"])
-    values = {g: _stats([ensemble[g][i]["efficiency_slope"] for i in idx]) for g in gaits if g in ensemble}
+    values = {g: _stats([ensemble[g][i]["efficiency_slope"] for i in idx]) for g in gaits if g in ensemble} if idx \
+        else _own_values(ensemble, gaits, "efficiency_slope")
     slope = {g: [ensemble[g][i]["efficiency_slope"] for i in idx] for g in gaits if g in ensemble}
     results = [max(slope["S"][k], slope["J"][k]) < min(slope["C"][k], slope[SIDEWINDING][k])
                for k in range(len(idx))]
@@ -205,7 +221,8 @@ def _mirror(ensemble):
     idx = _scenarios(ensemble, gaits, ["box_displacement"])
     dJ = np.array([ensemble["J"][i]["box_displacement"] for i in idx], dtype=float).reshape(-1, 2)
     dM = np.array([ensemble["J-mirror"][i]["box_displacement"] for i in idx], dtype=float).reshape(-1, 2)
-    values = {g: _stats(d[:, 1]) for g, d in (("J", dJ), ("J-mirror", dM))} if idx else {}
+    values = {g: _stats(d[:, 1]) for g, d in (("J", dJ), ("J-mirror", dM))} if idx \
+        else _own_values(ensemble, gaits, "box_displacement", lambda s: s["box_displacement"][1])
     results, details = [], {}
     if idx:
         s = np.ptp(dJ, axis=0)
@@ -251,7 +268,9 @@ def _steering(ensemble):
     failed = _failed_runs(ensemble, gaits)
     idx = _scenarios(ensemble, gaits, ["box_displacement"])
     d = {g: [ensemble[g][i]["box_displacement"] for i in idx] for g in gaits}
-    results, details, values = [], {}, {}
+    results, details = [], {}
+    values = _own_values(ensemble, gaits, "box_displacement",
+                         lambda s: math.degrees(math.atan2(s["box_displacement"][1], s["box_displacement"][0])))
     if idx:
         dirs = {g: directions(d[g]) for g in gaits}
         values = {g: _stats([dirs[g][0] + x for x in dirs[g][1]]) for g in gaits}
@@ -402,6 +421,8 @@ def _cell(text: str) -> str:
 
 def _mean_spread(st: dict) -> str:
     lo, hi = st["spread"]
+    if lo == hi:
+        return _fmt(st["mean"])  # one member, or all alike
     return f"{_fmt(st['mean'])} [{_fmt(lo)}, {_fmt(hi)}]"
 
 
