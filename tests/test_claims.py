@@ -327,3 +327,19 @@ def test_markdown_shows_the_ensemble_columns_and_the_failed_runs():
         assert row.replace("\\|", "").count("|") == 7, row  # the claim's own |P| escaped
     assert "| 7 | 7 | **holds** |" in text
     assert "A22" in text and "A7" in text and "C22" not in text and "reproduce.py" not in text
+
+
+def test_ensemble_summaries_keep_scenario_i_at_index_i():
+    """Two scenarios of made-up (still) runs; scenario 1 has no S run: S's index 1 is an error
+    summary, so S is left out of scenario 1 and named; the goal direction travels from the meta."""
+    from cobra_ref.reproduce.claims import ensemble_summaries
+    from test_analysis import made_up_trajectory
+    meta = {"gait_params": {"frequency": 0.5, "ramp_time": None}, "goal_direction": [0.0, 1.0]}
+    runs = [{g: made_up_trajectory(np.zeros((100, 11)), 0.01, meta) for g in ("C", "S")},
+            {"C": made_up_trajectory(np.zeros((100, 11)), 0.01, meta)}]
+    e = ensemble_summaries(runs)
+    assert [len(e["C"]), len(e["S"])] == [2, 2] and e["S"][1] == {"error": "no run"}
+    assert e["C"][0]["goal_direction"] == [0.0, 1.0] and e["C"][0]["steps_over_torque_limit"] == 0.0
+    tl = by_id(ensemble_claims(e))["TL"]
+    assert (tl["ensemble"]["n"], tl["ensemble"]["left_out"]) == (3, {"S[1]": "no run"})
+    assert by_id(ensemble_claims(e))["GT"]["verdict"] == "does not hold"  # the boxes did not move

@@ -387,7 +387,8 @@ def paper_claims(summaries: dict) -> list[dict]:
 
 def gait_summaries(results: dict) -> dict:
     """{gait: analysis.summary(traj)} plus each run's error (empty if it completed), largest
-    penetration and friction-cone residual, and the share of steps over tau_max.
+    penetration and friction-cone residual, the share of steps over tau_max, and the goal
+    direction when the trajectory's ``meta`` has one.
 
     Helper: the numbers behind ``paper_claims`` and the model-health table of ``claims.md``.
     """
@@ -398,7 +399,23 @@ def gait_summaries(results: dict) -> dict:
         out[g]["max_penetration"] = float(np.max(traj.steps["max_penetration"], initial=0.0))
         out[g]["max_cone_residual"] = float(np.max(traj.steps["cone_residual"], initial=0.0))
         out[g]["steps_over_torque_limit"] = float(np.mean(traj.steps["tau_excess"] > 0)) if len(traj.tau) else 0.0
+        goal = (traj.meta or {}).get("goal_direction")
+        if goal is not None:
+            out[g]["goal_direction"] = [float(x) for x in goal]
     return out
+
+
+def ensemble_summaries(members: list[dict]) -> dict:
+    """{gait: [summary of member 0, member 1, ...]} from a list of {gait: trajectory}, one dict per
+    scenario; a gait missing from a member gets the summary {"error": "no run"} so that index i
+    stays scenario i.
+
+    Helper: the input of ``ensemble_claims`` (``gait_summaries`` per member; a trajectory's
+    ``meta["goal_direction"]``, when set, becomes the summary's ``goal_direction``).
+    """
+    per_member = [gait_summaries(m) for m in members]
+    gaits = list(dict.fromkeys(g for m in per_member for g in m))
+    return {g: [m.get(g, {"error": "no run"}) for m in per_member] for g in gaits}
 
 
 def _fmt(v) -> str:
