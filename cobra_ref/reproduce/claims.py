@@ -9,8 +9,9 @@ threshold fixed here, before any result (assumption A30):
 * E  "the S and J shape lateral rolling gaits perform more efficiently than other gaits": the
   efficiency slope dW_loc / dW_box (``efficiency_slope``, fig. 6; lower = more efficient) of S
   and of J is below that of C and of sidewinding (per scenario: max(S, J) < min(C, sidewinding)).
-  The verdict is "ties" when the ensemble spread [min, max] of S or of J overlaps that of C or
-  of sidewinding: the ensemble does not resolve the ranking.
+  The verdict is "ties" (holds None) when the ensemble spread [min, max] of S or of J, over
+  the scenarios evaluated, overlaps that of C or of sidewinding: the ensemble does not resolve
+  the ranking, whatever the per-scenario count. (Without overlap every scenario ranks alike.)
 * WB "Sidewinding doing the most work on the box": ``box_work`` of sidewinding is larger than
   every other gait's.
 * EN "... but consuming the most energy to do it": ``locomotion_work`` of sidewinding is the
@@ -46,7 +47,8 @@ threshold fixed here, before any result (assumption A30):
   J0's (``joint_phase_correlation``, lags within +-1/2 period) of at least 0.7 (the shifted
   profile explains about half of the other's variance, r^2 >= 0.49), and the lags
   (``joint_phase_lags``) are not all zero: at least one beyond 0.05 period (18 degrees, a shift
-  a plot like fig. 8 shows). A joint without torque variance counts as correlation 0.
+  a plot like fig. 8 shows). A joint without torque variance counts as correlation 0; a run
+  without any correlation (no gait period, or under two periods after the ramp) is left out.
 * GT "the goal is to move the box on the flat ground towards a specified point": the angle
   between the box's displacement and the run's ``goal_direction`` is at most 30 degrees (the
   box ends in the goal's 60-degree cone; a box moved 1 mm or less fails). Runs without a
