@@ -31,10 +31,12 @@ import numpy as np
 
 from .contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND
 from .gaits import N_JOINTS
+from .params import CobraParameters
 from .quaternion import quat_to_rot
 
 JOINT_VELOCITIES = slice(6, 6 + N_JOINTS)  # the joint rates in qd (after the head's 6 base velocities)
 ROBUST_PERCENTILE = 99.0  # the percentile reported beside each maximum [%]
+PHASE_REFERENCE_JOINT = 0  # J0, the head's joint (the paper's joint 1, numbering from 1 at the head)
 
 
 def joint_rates(traj) -> np.ndarray:
@@ -173,6 +175,137 @@ def impacts(traj) -> dict:
             "p99_approach_speed": percentile_99(speed[speed > 0])}
 
 
+def robot_weight(params: CobraParameters | None = None) -> float:
+    """The robot's weight m g [N], the box excluded.
+
+    Helper: the scale of the non-impulsive claim. m is the robot's total mass from
+    ``CobraParameters`` (head, the ``n_body_links`` links and tail: 12 x 0.5 kg = 6 kg by default,
+    the paper's "each link ... weighing 0.5 kg"), g its ``gravity`` (assumption A20).
+    """
+    p = params or CobraParameters()
+    return float((p.mass_head + p.n_body_links * p.mass_link + p.mass_tail) * p.gravity)
+
+
+def gait_period(traj) -> float:
+    """The gait's period 1 / f [s] from ``traj.meta["gait_params"]["frequency"]``; nan without it.
+
+    Helper: the lag window of ``joint_phase_correlation`` (assumption A10's f).
+    """
+    f = (traj.meta or {}).get("gait_params", {}).get("frequency")
+    return 1.0 / float(f) if f else float("nan")
+
+
+def steady_start(traj) -> float:
+    """The time [s] from which the gait runs at its steady phase rate: the end of the phase-rate
+    ramp, ``ramp_time`` of the trajectory's gait parameters, or one period when it is None (the
+    gait library's default); nan when the trajectory carries no gait parameters.
+
+    Helper: the window of ``power_cv`` and ``joint_phase_correlation`` (``gaits`` module docstring).
+    """
+    gp = (traj.meta or {}).get("gait_params", {})
+    if gp.get("ramp_time") is not None:
+        return float(gp["ramp_time"])
+    return gait_period(traj)
+
+
+def coefficient_of_variation(values) -> float:
+    """CV = std / mean of ``values`` (population std, ddof = 0); nan when there are none or the
+    mean is not positive.
+
+    Implements: the steadiness measure of the claim "more steady power consumption by other
+    gaits" ([COBRA] sec. "Results", fig. 7): 0 for a constant power, larger for spikier power.
+    """
+    v = np.asarray(values, dtype=float).ravel()
+    if not len(v) or not np.mean(v) > 0:
+        return float("nan")
+    return float(np.std(v) / np.mean(v))
+
+
+def power_cv(traj) -> float:
+    """The coefficient of variation of |P|_loc over the steps from ``steady_start`` on; nan when the
+    start is unknown or no step is left.
+
+    Implements: the steadiness of fig. 7's power consumption. |P|_loc (the power the actuators
+    must supply, assumption A18) is used, not the signed P_loc: the paper speaks of power
+    *consumption*, and the signed power's mean, the CV's denominator, can be near zero when the
+    joints brake about as much as they drive. The ramp is left out because every gait starts
+    from rest (the ramp's growing power is not the gait's steadiness).
+    """
+    t0 = steady_start(traj)
+    if not np.isfinite(t0) or not len(traj.tau):
+        return float("nan")
+    keep = traj.t[:-1] >= t0 - 1e-12
+    return coefficient_of_variation(locomotion_power(traj)[1][keep])
+
+
+def phase_correlation(signals, dt: float, period: float, reference: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """(peak, lag): for each column j of ``signals`` (n samples, m columns), the largest normalized
+    cross-correlation with column ``reference`` over the lags |L| <= period / 2, and the lag at
+    which it is reached [periods, in [-1/2, 1/2]]. nan for a column (or all of them) that has no
+    variance, and for every column when the signals span less than two periods.
+
+    Implements: the Pearson correlation at lag L of the overlapping samples::
+
+        r_j(L) = corr(x_ref[k], x_j[k + L]),  k over the n - |L| samples where both exist
+
+    so r_j = 1 at L = l exactly when x_j is x_ref delayed by l (positive lag: column j follows
+    the reference) up to an offset and a positive scale (the normalization). Lags up to half a
+    period each way cover every phase shift of a periodic signal once. The sums over the overlap
+    are cumulative sums, and sum_k x_ref[k] x_j[k + L] for all L one FFT product.
+    """
+    x = np.asarray(signals, dtype=float)
+    n, m = x.shape
+    peak, lag = np.full(m, np.nan), np.full(m, np.nan)
+    if not (period > 0) or n * dt < 2 * period:
+        return peak, lag
+    x = x - x.mean(axis=0)
+    max_lag = int(np.floor(0.5 * period / dt + 1e-9))
+    lags = np.arange(-max_lag, max_lag + 1)
+    n_fft = 1 << int(np.ceil(np.log2(2 * n)))
+    a = x[:, reference]
+    A = np.fft.rfft(a, n_fft)
+    zero = np.zeros((1, m))
+    c1, c2 = np.concatenate([zero, np.cumsum(x, axis=0)]), np.concatenate([zero, np.cumsum(x**2, axis=0)])
+    over = n - np.abs(lags)
+    # overlap of the reference: a[0:n-L] for L >= 0, a[-L:n] for L < 0; of column j: b[L:n] or b[0:n+L]
+    a_lo, a_hi = np.where(lags >= 0, 0, -lags), np.where(lags >= 0, n - lags, n)
+    b_lo, b_hi = np.where(lags >= 0, lags, 0), np.where(lags >= 0, n, n + lags)
+    sa, saa = c1[a_hi, reference] - c1[a_lo, reference], c2[a_hi, reference] - c2[a_lo, reference]
+    var_a = saa - sa**2 / over
+    scale = np.max(np.abs(x), axis=0)
+    for j in range(m):
+        if not scale[j] > 0 or not scale[reference] > 0:
+            continue
+        sab = np.fft.irfft(np.conj(A) * np.fft.rfft(x[:, j], n_fft), n_fft)[lags % n_fft]
+        sb, sbb = c1[b_hi, j] - c1[b_lo, j], c2[b_hi, j] - c2[b_lo, j]
+        var_b = sbb - sb**2 / over
+        ok = (var_a > 1e-12 * over * scale[reference] ** 2) & (var_b > 1e-12 * over * scale[j] ** 2)
+        if not np.any(ok):
+            continue
+        r = np.full(len(lags), -np.inf)
+        r[ok] = (sab[ok] - sa[ok] * sb[ok] / over[ok]) / np.sqrt(var_a[ok] * var_b[ok])
+        best = int(np.argmax(r))
+        peak[j], lag[j] = float(min(r[best], 1.0)), float(lags[best] * dt / period)
+    return peak, lag
+
+
+def joint_phase_correlation(traj) -> tuple[list, list]:
+    """(peaks, lags [periods]) of ``phase_correlation`` of the joint torques tau_j,k over the steps
+    from ``steady_start`` on, against joint J0 (``PHASE_REFERENCE_JOINT``), with the gait's period;
+    lists of nan when the period or the ramp is unknown or fewer than two periods remain.
+
+    Implements: the numbers behind fig. 8's "Other joints show similar profiles offset by a phase
+    angle based on the executed gait" ([COBRA]).
+    """
+    period, t0 = gait_period(traj), steady_start(traj)
+    if not (np.isfinite(period) and np.isfinite(t0)) or not len(traj.tau):
+        nan = [float("nan")] * N_JOINTS
+        return nan, list(nan)
+    keep = traj.t[:-1] >= t0 - 1e-12
+    peak, lag = phase_correlation(traj.tau[keep], traj.dt, period, PHASE_REFERENCE_JOINT)
+    return [float(v) for v in peak], [float(v) for v in lag]
+
+
 class ContactForces(NamedTuple):
     """Per step and per body, the summed normal and tangential contact force magnitudes [N]."""
 
@@ -216,12 +349,22 @@ def summary(traj) -> dict:
       tau_max [N m] (-inf for a run without steps);
     * ``max_approach_speed`` / ``p99_approach_speed``: of the contact onsets' approach speeds
       [m/s] (``impacts``).
+
+    For the claims beyond the rankings:
+
+    * ``impact_impulse_per_second``: ``impact_impulse`` / duration [N] (a mean force), beside
+      ``robot_weight`` = m g [N] (``robot_weight``);
+    * ``power_cv``: ``power_cv``, the steadiness of |P|_loc after the ramp (nan if unknown);
+    * ``joint_phase_correlation`` / ``joint_phase_lags``: ``joint_phase_correlation``, per joint
+      J0..J10 against J0, the lags in gait periods;
+    * ``gait_period`` and ``steady_start`` [s], the window these use (nan if unknown).
     """
     p, p_abs = locomotion_power(traj)
     tau_step = np.abs(traj.tau).max(axis=1) if traj.tau.size else np.zeros(0)
     w_loc, w_box = locomotion_work(traj), box_work(traj)
     d = traj.box_pose[-1, :2] - traj.box_pose[0, :2]
-    return {
+    peaks, lags = joint_phase_correlation(traj)
+    out = {
         "duration": float(traj.t[-1] - traj.t[0]),
         "locomotion_work": float(w_loc[-1]),
         "box_work": float(w_box[-1]),
@@ -238,10 +381,19 @@ def summary(traj) -> dict:
         "p99_tau_excess": percentile_99(traj.steps["tau_excess"], empty=-np.inf),
         "fixed_point_converged": float(np.mean(traj.steps["fp_converged"])) if len(traj.tau) else 1.0,
         **impacts(traj),
+        "robot_weight": robot_weight(),
+        "power_cv": power_cv(traj),
+        "joint_phase_correlation": peaks,
+        "joint_phase_lags": lags,
+        "gait_period": gait_period(traj),
+        "steady_start": steady_start(traj),
     }
+    out["impact_impulse_per_second"] = out["impact_impulse"] / max(out["duration"], 1e-300)
+    return out
 
 
 __all__ = ["joint_rates", "locomotion_power", "locomotion_work", "box_point_velocity", "contact_power_on_box",
            "box_work", "box_distance", "efficiency_fit", "efficiency_slope", "impacts", "ContactForces", "contact_forces",
-           "summary", "percentile_99",
+           "summary", "percentile_99", "robot_weight", "gait_period", "steady_start", "coefficient_of_variation",
+           "power_cv", "phase_correlation", "joint_phase_correlation",
            "ROBOT_GROUND", "ROBOT_BOX", "BOX_GROUND"]

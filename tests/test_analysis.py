@@ -104,3 +104,96 @@ def test_box_distance(pushing_run):
     d = analysis.box_distance(pushing_run)
     assert d[0] == 0.0
     assert d[-1] == pytest.approx(np.linalg.norm(pushing_run.box_pose[-1, :2] - pushing_run.box_pose[0, :2]))
+
+
+# --- the statistics of the claims beyond the rankings (worked examples, no simulation) ---------------------------
+
+def made_up_trajectory(tau, dt, meta=None, joint_rate=1.0):
+    """A trajectory with the given torques (N, 11), every joint turning at ``joint_rate`` rad/s, the
+    box still, no contacts, and ``meta`` (the gait parameters the steady window comes from)."""
+    from cobra_ref.trajectory import CONTACT_KEYS, STEP_KEYS, Trajectory
+    n = len(tau)
+    qd = np.zeros((n + 1, 6 + 11 + 6))
+    qd[:, 6:17] = joint_rate
+    box_pose = np.tile([0.0, 0.0, 0.05, 1.0, 0.0, 0.0, 0.0], (n + 1, 1))
+    steps = {k: np.zeros(n) for k in STEP_KEYS}
+    steps["fp_converged"] = np.ones(n)
+    steps["tau_excess"] = np.abs(tau).max(axis=1) - 9.2
+    contacts = {k: np.zeros((0, 3)) if k in ("contact_point", "contact_normal", "contact_force") else np.zeros(0)
+                for k in CONTACT_KEYS}
+    return Trajectory(dt, np.arange(n + 1) * dt, np.zeros((n + 1, 25)), qd, np.asarray(tau, float), box_pose,
+                      steps, contacts, meta=meta or {})
+
+
+def test_phase_correlation_finds_the_known_lags_of_pure_sines():
+    """Columns sin(2 pi (t - l_j) / P), scaled and offset, with l_j = 0, 0.1, -0.25, 0.4 periods: each
+    correlates 1 with column 0 at lag l_j. A sine of twice the frequency correlates with it at no
+    lag: over whole periods the two are orthogonal, and over the overlaps (whole periods plus up to
+    half of one) the peak stays below 0.2; fewer than two periods give nan."""
+    dt, P = 0.01, 2.0
+    t = np.arange(0.0, 8.0, dt)
+    lags = [0.0, 0.1, -0.25, 0.4]
+    x = np.stack([np.sin(2 * np.pi * (t - l * P) / P) for l in lags] + [np.sin(4 * np.pi * t / P)], axis=1)
+    x[:, 2] = 3 * x[:, 2] + 5
+    peak, lag = analysis.phase_correlation(x, dt, P, reference=0)
+    assert peak[:4] == pytest.approx(1.0, abs=1e-9)
+    assert lag[:4] == pytest.approx(lags, abs=1e-9)
+    assert abs(peak[4]) < 0.2
+    short_peak, short_lag = analysis.phase_correlation(x[: int(1.9 * P / dt)], dt, P)
+    assert np.all(np.isnan(short_peak)) and np.all(np.isnan(short_lag))
+    x[:, 3] = 2.0  # no variance: no correlation
+    assert np.isnan(analysis.phase_correlation(x, dt, P)[0][3])
+
+
+def test_joint_phase_correlation_uses_the_torques_after_the_ramp():
+    """Joint j's torque is sin(2 pi (t - j / 25 P) / P) from the ramp's end (2 s) on and noise before;
+    the lags found are j / 25 periods, the peaks 1, and without gait parameters all nan."""
+    dt, P = 0.01, 2.0
+    t = np.arange(0.0, 10.0, dt)
+    tau = np.stack([np.sin(2 * np.pi * (t - j / 25 * P) / P) for j in range(11)], axis=1)
+    tau[t < 2.0] = np.random.default_rng(0).normal(size=(int(np.sum(t < 2.0)), 11))
+    traj = made_up_trajectory(tau, dt, {"gait_params": {"frequency": 1 / P, "ramp_time": 2.0}})
+    assert analysis.steady_start(traj) == 2.0 and analysis.gait_period(traj) == P
+    peaks, lags = analysis.joint_phase_correlation(traj)
+    assert peaks == pytest.approx([1.0] * 11, abs=1e-9)
+    assert lags == pytest.approx([j / 25 for j in range(11)], abs=1e-9)
+    s = analysis.summary(traj)
+    assert s["joint_phase_lags"] == pytest.approx(lags) and s["steady_start"] == 2.0
+    bare = made_up_trajectory(tau, dt)
+    assert np.all(np.isnan(analysis.joint_phase_correlation(bare)[0]))
+    assert analysis.steady_start(made_up_trajectory(tau, dt, {"gait_params": {"frequency": 0.5, "ramp_time": None}})) \
+        == 2.0  # the default ramp: one period
+
+
+def test_coefficient_of_variation_worked_examples():
+    """Constant power: CV 0; the values 1 and 3: mean 2, std 1, CV 0.5; no values or a mean <= 0: nan."""
+    assert analysis.coefficient_of_variation([2.0, 2.0, 2.0]) == 0.0
+    assert analysis.coefficient_of_variation([1.0, 3.0]) == pytest.approx(0.5)
+    assert np.isnan(analysis.coefficient_of_variation([]))
+    assert np.isnan(analysis.coefficient_of_variation([-1.0, 1.0]))
+
+
+def test_power_cv_is_taken_after_the_ramp():
+    """Every joint turning at 1 rad/s: |P|_loc = sum_j |tau_j|. Constant torques 0.5 after the ramp's
+    1 s (and wild ones before): CV 0. Torques alternating 0.5 and 1.5 after it: |P| alternates 5.5 and
+    16.5, CV = 5.5 / 11 = 0.5."""
+    dt = 0.01
+    t = np.arange(0.0, 3.0, dt)
+    tau = np.full((len(t), 11), 0.5)
+    tau[t < 1.0] = np.random.default_rng(1).normal(scale=5.0, size=(int(np.sum(t < 1.0)), 11))
+    meta = {"gait_params": {"frequency": 1.0, "ramp_time": None}}
+    assert analysis.power_cv(made_up_trajectory(tau, dt, meta)) == pytest.approx(0.0, abs=1e-12)
+    tau[t >= 1.0] = np.where((np.arange(len(t)) % 2 == 0)[:, None], 0.5, 1.5)[t >= 1.0]
+    assert analysis.power_cv(made_up_trajectory(tau, dt, meta)) == pytest.approx(0.5)
+    assert np.isnan(analysis.power_cv(made_up_trajectory(tau, dt)))  # no gait parameters: no ramp known
+
+
+def test_impact_rate_and_the_robot_weight():
+    """m g = 12 links x 0.5 kg x 9.81 m/s^2 = 58.86 N; the impact impulse per second is the total
+    impact impulse over the duration (here 0.3 N s in 2 s: 0.15 N)."""
+    assert analysis.robot_weight() == pytest.approx(58.86)
+    dt = 0.01
+    traj = made_up_trajectory(np.zeros((200, 11)), dt)
+    traj.steps["impact_impulse"][[10, 50]] = [0.1, 0.2]
+    s = analysis.summary(traj)
+    assert s["impact_impulse_per_second"] == pytest.approx(0.15) and s["robot_weight"] == pytest.approx(58.86)

@@ -40,10 +40,12 @@ def test_every_output_is_written(quick_run):
 def test_claims_json_has_the_issue_keys(quick_run):
     with open(os.path.join(quick_run, "claims.json")) as f:
         claims = json.load(f)
-    assert [c["id"] for c in claims] == ["E", "WB", "EN", "PP", "SL", "MJ"]
+    assert [c["id"] for c in claims] == ["E", "WB", "EN", "PP", "SP", "SL", "MJ", "MJ-C", "NI", "TL", "PS", "GT"]
     for c in claims:
-        assert set(c) == {"id", "claim", "values", "holds"}
+        assert set(c) == {"id", "claim", "values", "holds", "verdict", "ensemble", "details"}
         assert c["holds"] in (True, False, None)
+        assert c["verdict"] in ("holds", "does not hold", "undecided", "ties", "not tested")
+        assert c["ensemble"]["n"] in (0, 1, 5)  # one member per gait: per scenario 1, per run 5
     with open(os.path.join(quick_run, "claims.md")) as f:
         assert "| WB |" in f.read()
 
@@ -62,7 +64,7 @@ def test_work_on_the_box_recomputed_by_hand_from_the_npz(quick_run):
             omega = quat_to_rot(traj.box_pose[k, 3:]) @ u[3:]
             total -= force @ (u[:3] + np.cross(omega, point - traj.box_pose[k, :3])) * traj.dt
     assert total > 0, "the J hook reaches the box within the quick run's 1 s"
-    assert wb["values"]["J"] == pytest.approx(total, rel=1e-9)
+    assert wb["values"]["J"]["mean"] == pytest.approx(total, rel=1e-9)
 
 
 def test_a_warm_run_reuses_the_simulations_and_the_figures(quick_run):
@@ -73,7 +75,8 @@ def test_a_warm_run_reuses_the_simulations_and_the_figures(quick_run):
 
 
 def test_claim_verdicts_follow_the_numbers():
-    """Hand-made summaries: sidewinding largest everywhere, S and J with the lowest slopes."""
+    """Hand-made single summaries (``paper_claims``): sidewinding largest everywhere, S and J with the
+    lowest slopes; the six ranking and mirror claims hold, then fail as the numbers change."""
     base = {"efficiency_slope": 10.0, "box_work": 1.0, "locomotion_work": 5.0, "peak_abs_power": 3.0,
             "box_distance": 0.1, "box_displacement": [0.1, 0.0], "error": ""}
     s = {g: dict(base) for g in ("C", "S", "J", "J-mirror", "sidewinding")}
@@ -81,7 +84,8 @@ def test_claim_verdicts_follow_the_numbers():
     for key in ("box_work", "locomotion_work", "peak_abs_power", "box_distance"):
         s["sidewinding"][key] = 2 * base[key]
     s["J"]["box_displacement"], s["J-mirror"]["box_displacement"] = [0.1, -0.02], [0.1, 0.02]
-    assert all(c["holds"] for c in paper_claims(s))
+    six = ("E", "WB", "EN", "PP", "SL", "MJ")
+    assert all(c["holds"] for c in paper_claims(s) if c["id"] in six)
     s["J"]["efficiency_slope"] = 12.0  # J now less efficient than C and sidewinding (10), S still better
     assert {c["id"]: c["holds"] for c in paper_claims(s)}["E"] is False, "both S and J must beat both"
     s["J"]["efficiency_slope"] = 5.0
@@ -103,3 +107,239 @@ def test_bad_input_is_refused_before_any_work(args, message, capsys, tmp_path):
         main(argv)
     assert message in str(exc.value)
     assert not os.path.exists(tmp_path / "o") or not os.listdir(tmp_path / "o")
+
+
+# --- the ensemble claims: every claim can hold and can fail (hand-made summaries, no simulation) ------------------
+
+from cobra_ref.reproduce.claims import ensemble_claims, to_markdown, verdict  # noqa: E402
+
+GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
+
+
+def member(gait: str, i: int) -> dict:
+    """Scenario i's summary of ``gait`` in an ensemble where every claim holds: sidewinding does the
+    most work, uses the most energy, has the largest and least steady power and moves the box
+    furthest; S and J have the lowest slopes (5 against 10, spreads 0.07 apart from overlapping);
+    J pushes the box 17-20 degrees to the right of C, J-mirror as far to the left; no impacts to
+    speak of (0.1 N against m g = 58.86 N), no step over tau_max, the joints' torques one profile
+    shifted by 0.1 period (peak correlation 0.9), and every box within 20 degrees of the goal +x."""
+    eps = 0.01 * i
+    s = {"error": "", "efficiency_slope": 10.0 + eps, "box_work": 1.0 + eps, "locomotion_work": 5.0 + eps,
+         "peak_abs_power": 3.0 + eps, "power_cv": 0.2 + eps, "box_distance": 0.1 + eps / 10,
+         "box_displacement": [0.1, 0.0], "impact_impulse_per_second": 0.1, "robot_weight": 58.86,
+         "steps_over_torque_limit": 0.0, "joint_phase_correlation": [1.0] + [0.9] * 10,
+         "joint_phase_lags": [0.0] + [0.1] * 10, "goal_direction": [1.0, 0.0]}
+    if gait in ("S", "J"):
+        s["efficiency_slope"] = 5.0 + eps
+    if gait == "sidewinding":
+        s.update(box_work=2.0 + eps, locomotion_work=10.0 + eps, peak_abs_power=6.0 + eps, power_cv=0.8 + eps,
+                 box_distance=0.2 + eps / 10, box_displacement=[0.2, 0.0])
+    if gait == "J":
+        s["box_displacement"] = [0.1, -0.03 - eps / 10]
+    if gait == "J-mirror":
+        s["box_displacement"] = [0.1, 0.03 + eps / 10]
+    return s
+
+
+def ensemble(n: int = 8, change=None, members=None) -> dict:
+    """{gait: [member(gait, i) for i < n]}, with ``change(gait, summary)`` applied to the members
+    ``members`` (default all)."""
+    out = {g: [member(g, i) for i in range(n)] for g in GAITS}
+    for g in GAITS:
+        for i in (range(n) if members is None else members):
+            if change is not None:
+                change(g, out[g][i])
+    return out
+
+
+def by_id(claims) -> dict:
+    return {c["id"]: c for c in claims}
+
+
+def _set(gait, key, value):
+    """A change of ``key`` to ``value`` in ``gait``'s members (a callable value gets the summary)."""
+    def change(g, s):
+        if g == gait:
+            s[key] = value(s) if callable(value) else value
+    return change
+
+
+# one change per claim that makes it fail for every member it touches
+BREAK = {
+    "E": _set("S", "efficiency_slope", 20.0),  # S now the least efficient, far outside C's spread
+    "WB": _set("sidewinding", "box_work", 0.5),
+    "EN": _set("sidewinding", "locomotion_work", 1.0),
+    "PP": _set("sidewinding", "peak_abs_power", 1.0),
+    "SP": _set("sidewinding", "power_cv", 0.1),  # sidewinding now the steadiest
+    "SL": _set("sidewinding", "box_distance", 0.01),
+    "MJ": _set("J-mirror", "box_displacement", lambda s: [0.1, -0.03]),  # pushed to J's side
+    "MJ-C": _set("J", "box_displacement", lambda s: [0.1, 0.0]),  # J pushes where C does
+    "NI": _set("C", "impact_impulse_per_second", 1.0),  # 1.7 % of m g
+    "TL": _set("S", "steps_over_torque_limit", 0.001),
+    "PS": _set("J", "joint_phase_correlation", [1.0] * 10 + [0.5]),  # one joint unlike J0
+    "GT": _set("C", "goal_direction", [0.0, 1.0]),  # the box goes +x, the goal is +y
+}
+
+
+def test_every_claim_holds_on_the_made_up_ensemble():
+    claims = ensemble_claims(ensemble())
+    assert [c["id"] for c in claims] == list(BREAK)
+    for c in claims:
+        assert c["holds"] is True and c["verdict"] == "holds", c["id"]
+        assert c["ensemble"]["holds"] == c["ensemble"]["n"] > 0
+    c = by_id(claims)
+    assert c["WB"]["ensemble"]["n"] == 8 and c["NI"]["ensemble"]["n"] == 40  # per scenario, per run
+    assert c["WB"]["values"]["sidewinding"] == {"mean": pytest.approx(2.035), "spread": [2.0, pytest.approx(2.07)]}
+
+
+@pytest.mark.parametrize("cid", list(BREAK))
+def test_every_claim_can_fail(cid):
+    """The change that breaks claim ``cid`` makes it "does not hold"; a per-run claim broken in one
+    gait fails for that gait's 8 of 40 runs, which is 80 % holding: it breaks the per-scenario
+    claims only. So for the per-run claims the change is applied to every gait."""
+    per_run = cid in ("NI", "TL", "PS", "GT")
+    change = BREAK[cid]
+    if per_run:
+        key = {"NI": "impact_impulse_per_second", "TL": "steps_over_torque_limit", "PS": "joint_phase_correlation",
+               "GT": "goal_direction"}[cid]
+        value = {"NI": 1.0, "TL": 0.001, "PS": [1.0] * 10 + [0.5], "GT": [0.0, 1.0]}[cid]
+
+        def change(g, s):
+            s[key] = value
+    c = by_id(ensemble_claims(ensemble(change=change)))[cid]
+    assert c["holds"] is False and c["verdict"] == "does not hold", c
+    assert c["ensemble"]["holds"] == 0
+
+
+@pytest.mark.parametrize("cid", ["NI", "TL", "PS", "GT"])
+def test_a_per_run_claim_broken_in_one_gait_fails_for_its_runs(cid):
+    """BREAK changes one gait only: its 8 runs fail, the other 32 hold."""
+    c = by_id(ensemble_claims(ensemble(change=BREAK[cid])))[cid]
+    assert (c["ensemble"]["n"], c["ensemble"]["holds"]) == (40, 32)
+
+
+def test_phase_claim_needs_a_nonzero_lag():
+    """Every joint correlating 1 at lag 0 (a profile not shifted) fails PS; one lag of 0.05 period
+    suffices, 0.049 does not."""
+    def lags(value):
+        def change(g, s):
+            s["joint_phase_correlation"], s["joint_phase_lags"] = [1.0] * 11, [0.0] * 10 + [value]
+        return change
+    assert by_id(ensemble_claims(ensemble(change=lags(0.0))))["PS"]["verdict"] == "does not hold"
+    assert by_id(ensemble_claims(ensemble(change=lags(0.049))))["PS"]["verdict"] == "does not hold"
+    assert by_id(ensemble_claims(ensemble(change=lags(-0.05))))["PS"]["verdict"] == "holds"
+
+
+def test_efficiency_ties_when_the_spreads_overlap():
+    """S's slopes 9.955 + 0.02 i reach into C's spread 10 + 0.01 i (i < 8): the ensemble does not
+    resolve the ranking, whatever the per-scenario count (here S beats C in scenarios 0-4 only)."""
+    slope = _set("S", "efficiency_slope", lambda s: 9.955 + 2 * (s["efficiency_slope"] - 5))
+    c = by_id(ensemble_claims(ensemble(change=slope)))["E"]
+    assert c["verdict"] == "ties" and c["holds"] is None
+    assert "S / C" in c["details"]["overlapping spreads"]
+    assert c["ensemble"]["holds"] == 5
+
+
+def test_five_of_eight_is_undecided():
+    """Sidewinding does the most work on the box in 5 of 8 scenarios: 62.5 %, between 20 % and 80 %."""
+    c = by_id(ensemble_claims(ensemble(change=BREAK["WB"], members=[5, 6, 7])))["WB"]
+    assert (c["ensemble"]["n"], c["ensemble"]["holds"]) == (8, 5)
+    assert c["verdict"] == "undecided" and c["holds"] is None
+
+
+def test_the_80_20_bands():
+    assert verdict(5, 4) == (True, "holds")
+    assert verdict(8, 6) == (None, "undecided")  # 75 %
+    assert verdict(8, 7) == (True, "holds")
+    assert verdict(10, 2) == (False, "does not hold")
+    assert verdict(8, 2) == (None, "undecided")  # 25 %
+    assert verdict(0, 0) == (None, "not tested")
+
+
+def test_a_member_with_an_error_is_left_out_and_named():
+    """C's scenario 3 failed (and its numbers are nonsense): the per-scenario claims count 7
+    scenarios, the per-run claims 39 runs, every verdict still holds, and each names C[3]."""
+    e = ensemble()
+    e["C"][3].update(error="SimulationError: diverged at t = 2.1 s", box_work=99.0, impact_impulse_per_second=99.0)
+    claims = by_id(ensemble_claims(e))
+    assert claims["WB"]["ensemble"]["n"] == 7 and claims["NI"]["ensemble"]["n"] == 39
+    for cid in ("E", "WB", "EN", "PP", "SP", "SL", "MJ-C", "NI", "TL", "PS", "GT"):
+        assert claims[cid]["verdict"] == "holds", cid
+        assert claims[cid]["ensemble"]["left_out"] == {"C[3]": "SimulationError: diverged at t = 2.1 s"}, cid
+    assert claims["MJ"]["ensemble"]["left_out"] == {}  # MJ needs J and J-mirror only
+
+
+def test_not_tested_without_a_gait_or_a_statistic():
+    e = ensemble()
+    del e["sidewinding"]
+    c = by_id(ensemble_claims(e))
+    for cid in ("WB", "EN", "PP", "SP", "SL"):
+        assert c[cid]["verdict"] == "not tested" and c[cid]["holds"] is None, cid
+    assert c["E"]["verdict"] == "not tested"
+    assert c["WB"]["values"]["C"]["mean"] == pytest.approx(1.035)  # the gaits there still shown
+    assert c["MJ"]["verdict"] == "holds"
+    e = ensemble(change=lambda g, s: [s.pop("power_cv"), s.pop("goal_direction")])
+    c = by_id(ensemble_claims(e))
+    assert c["SP"]["verdict"] == "not tested" and c["GT"]["verdict"] == "not tested"
+    e = ensemble(change=lambda g, s: s.update(joint_phase_correlation=[float("nan")] * 11))  # runs too short
+    assert by_id(ensemble_claims(e))["PS"]["verdict"] == "not tested"
+    e = ensemble(change=lambda g, s: s.update(error="killed"))
+    assert all(c["verdict"] == "not tested" for c in ensemble_claims(e))
+
+
+def test_mirror_tolerance_is_the_spread_of_J():
+    """J's sideways push varies by 7 mm over the ensemble, so J-mirror may miss the reflection by up
+    to 8 mm in y; 9 mm misses it."""
+    def mirror_off(dy):
+        return _set("J-mirror", "box_displacement", lambda s: [0.1, s["box_displacement"][1] + dy])
+    assert by_id(ensemble_claims(ensemble(change=mirror_off(0.0079))))["MJ"]["verdict"] == "holds"
+    c = by_id(ensemble_claims(ensemble(change=mirror_off(0.009))))["MJ"]
+    assert c["verdict"] == "does not hold"
+    assert c["details"]["tolerance_y_m"] == pytest.approx(0.008)
+
+
+def test_steering_margin_widens_with_the_angular_spreads():
+    """J pushes the box 17 degrees right of C in every scenario: MJ-C holds (margin 0 + 0 + 5). With
+    scenario 7's push at 47 degrees instead, J's directions spread 30 degrees, half-spread 15, and the
+    margin 15 + 0 + 5 = 20 degrees exceeds the 17 degrees of the other 7 scenarios: 1 of 8 holds."""
+    def at(angles):
+        def change(g, s):
+            if g == "J":
+                i = round(-(s["box_displacement"][1] + 0.03) * 1000)  # member() puts y = -0.03 - i / 1000
+                a = np.radians(-angles(i))
+                s["box_displacement"] = [0.1 * np.cos(a), 0.1 * np.sin(a)]
+        return change
+    c = by_id(ensemble_claims(ensemble(change=at(lambda i: 17.0))))["MJ-C"]
+    assert c["verdict"] == "holds" and c["details"]["threshold_deg"] == pytest.approx(5.0)
+    c = by_id(ensemble_claims(ensemble(change=at(lambda i: 47.0 if i == 7 else 17.0))))["MJ-C"]
+    assert c["details"]["half_spread_J_deg"] == pytest.approx(15.0)
+    assert c["details"]["threshold_deg"] == pytest.approx(20.0)
+    assert (c["ensemble"]["n"], c["ensemble"]["holds"]) == (8, 1) and c["verdict"] == "does not hold"
+
+
+def test_markdown_shows_the_ensemble_columns_and_the_failed_runs():
+    e = ensemble()
+    e["S"][2]["error"] = "diverged"
+    text = to_markdown(ensemble_claims(e), e, {"members": 8})
+    assert "| id | claim | per gait: mean [min, max] | n | members holding | verdict |" in text
+    assert "| S | 7 / 8 |" in text and "- S[2]: diverged" in text
+    for row in (line for line in text.splitlines() if line.startswith("| WB ") or line.startswith("| PP ")):
+        assert row.replace("\\|", "").count("|") == 7, row  # the claim's own |P| escaped
+    assert "| 7 | 7 | **holds** |" in text
+    assert "A22" in text and "A7" in text and "C22" not in text and "reproduce.py" not in text
+
+
+def test_ensemble_summaries_keep_scenario_i_at_index_i():
+    """Two scenarios of made-up (still) runs; scenario 1 has no S run: S's index 1 is an error
+    summary, so S is left out of scenario 1 and named; the goal direction travels from the meta."""
+    from cobra_ref.reproduce.claims import ensemble_summaries
+    from test_analysis import made_up_trajectory
+    meta = {"gait_params": {"frequency": 0.5, "ramp_time": None}, "goal_direction": [0.0, 1.0]}
+    runs = [{g: made_up_trajectory(np.zeros((100, 11)), 0.01, meta) for g in ("C", "S")},
+            {"C": made_up_trajectory(np.zeros((100, 11)), 0.01, meta)}]
+    e = ensemble_summaries(runs)
+    assert [len(e["C"]), len(e["S"])] == [2, 2] and e["S"][1] == {"error": "no run"}
+    assert e["C"][0]["goal_direction"] == [0.0, 1.0] and e["C"][0]["steps_over_torque_limit"] == 0.0
+    tl = by_id(ensemble_claims(e))["TL"]
+    assert (tl["ensemble"]["n"], tl["ensemble"]["left_out"]) == (3, {"S[1]": "no run"})
+    assert by_id(ensemble_claims(e))["GT"]["verdict"] == "does not hold"  # the boxes did not move

@@ -1,87 +1,396 @@
-"""The paper's claims, each tested by a number computed from our simulations.
+"""The paper's claims, each tested by a number computed from our simulations, per ensemble member.
 
 Helper: the claims report of ``cobra-ref figures`` (``claims.json`` and ``claims.md``).
 
-[COBRA] gives no numbers, only plots and these sentences (sec. "Results"):
+[COBRA] gives no numbers, only plots and sentences (sec. "Results", figs. 6-9; assumption A21).
+Each claim below is a statistic of ``analysis.summary`` and a condition on it, with its
+threshold fixed here, before any result (assumption A30):
 
 * E  "the S and J shape lateral rolling gaits perform more efficiently than other gaits": the
-  efficiency slope dW_loc / dW_box (``analysis.efficiency_slope``, fig. 6; lower = more
-  efficient) of S and of J is below that of C and of sidewinding.
-* WB "Sidewinding doing the most work on the box": W_box(T) of sidewinding is the largest.
-* EN "... but consuming the most energy to do it": W_loc(T) of sidewinding is the largest.
-* PP "the large peaks in instantaneous power from sidewinding": max |P_loc| of sidewinding is
-  the largest (fig. 7).
-* SL "a slower but more energy efficient loco-manipulation" (the steady gaits against
-  sidewinding): every rolling gait moved the box less far than sidewinding in the same time
-  (fig. 9).
+  efficiency slope dW_loc / dW_box (``efficiency_slope``, fig. 6; lower = more efficient) of S
+  and of J is below that of C and of sidewinding (per scenario: max(S, J) < min(C, sidewinding)).
+  The verdict is "ties" (holds None) when the ensemble spread [min, max] of S or of J, over
+  the scenarios evaluated, overlaps that of C or of sidewinding: the ensemble does not resolve
+  the ranking, whatever the per-scenario count. (Without overlap every scenario ranks alike.)
+* WB "Sidewinding doing the most work on the box": ``box_work`` of sidewinding is larger than
+  every other gait's.
+* EN "... but consuming the most energy to do it": ``locomotion_work`` of sidewinding is the
+  largest.
+* PP "the large peaks in instantaneous power from sidewinding": ``peak_abs_power`` (max |P|_loc,
+  fig. 7) of sidewinding is the largest.
+* SP "as compared to the more steady power consumption by other gaits": ``power_cv`` (the
+  coefficient of variation of |P|_loc after the ramp) of every rolling gait is below
+  sidewinding's.
+* SL "a slower but more energy efficient loco-manipulation": ``box_distance`` of every other
+  gait is below sidewinding's (the same time, fig. 9).
 * MJ "The J-shaped lateral rolling gait is asymmetrical and can be mirrored to execute control
-  on the direction in which the object is moved": the box's sideways displacement (y, the
-  robot's start heading is +x) has opposite signs for J and J-mirror, each more than 1 mm.
+  on the direction in which the object is moved": J-mirror's box displacement (x, y; the
+  robot's start heading is +x) is J's reflected in the x axis, |x_J - x_M| <= s_x + 1 mm and
+  |y_J + y_M| <= s_y + 1 mm with (s_x, s_y) the spread (max - min) of J's displacements over the
+  ensemble (how far one scenario's J push is from another's, so how close a reflection can be
+  asked to be) plus 1 mm (below it a push is not resolved); and the box goes sideways: y_J and
+  y_M of opposite signs, each beyond 1 mm.
+* MJ-C the same sentence, direction control: J steers the box in a direction different from
+  C's: the angle between J's and C's displacements exceeds h_J + h_C + 5 degrees, with h_g the
+  angular half-spread of gait g's displacement directions over the ensemble (half of max - min
+  of their deviations from the mean direction) and 5 degrees a margin a reader of fig. 3 could
+  see; a box moved by 1 mm or less has no direction and fails.
+* NI the premise "non-impulsive": each run's ``impact_impulse_per_second`` (the impacts'
+  impulse per second, ``analysis.impacts``, a mean force) is at most 1 % of the robot's weight
+  m g (``robot_weight``: 12 links x 0.5 kg from ``CobraParameters``, the box excluded). The
+  ground carries m g on average; impacts that supply under 1 % of it leave the load to forces
+  that grow continuously.
+* TL eq. (6) constraint (3), |tau| <= tau_max: ``steps_over_torque_limit`` == 0 (with the
+  servo of assumption A7 the bound is part of the QP, so this checks that it was respected).
+* PS fig. 8's "Other joints show similar profiles offset by a phase angle based on the executed
+  gait": every joint's torque (after the ramp) has a peak normalized cross-correlation with
+  J0's (``joint_phase_correlation``, lags within +-1/2 period) of at least 0.7 (the shifted
+  profile explains about half of the other's variance, r^2 >= 0.49), and the lags
+  (``joint_phase_lags``) are not all zero: at least one beyond 0.05 period (18 degrees, a shift
+  a plot like fig. 8 shows). A joint without torque variance counts as correlation 0; a run
+  without any correlation (no gait period, or under two periods after the ramp) is left out.
+* GT "the goal is to move the box on the flat ground towards a specified point": the angle
+  between the box's displacement and the run's ``goal_direction`` is at most 30 degrees (the
+  box ends in the goal's 60-degree cone; a box moved 1 mm or less fails). Runs without a
+  ``goal_direction`` are not evaluated.
 
-Each claim is a dict {id, claim, values, holds}; ``holds`` is None when a gait it needs is
-missing or its run failed (the values say why). The MuJoCo comparison adds its own entries
-(``mujoco_check.claims``).
+Ensembles. ``ensemble[gait][i]`` is member i's summary; member i of every gait is scenario i.
+A claim comparing gaits (E, WB, EN, PP, SP, SL, MJ, MJ-C) is evaluated per scenario i over the
+scenarios every gait it needs has; a claim about each run (NI, TL, PS, GT) per member of every
+gait. A member whose run has an error, or lacks the statistic (absent or nan), is left out;
+runs with an error are named. Of the n members (or scenarios) evaluated, the claim **holds**
+when it holds for >= 80 %, **does not hold** when for <= 20 %, and is **undecided** between;
+it is **not tested** when a gait or statistic it needs is missing or every member was left out.
+The 80/20 bands accept one member in five going against the majority: an ensemble perturbs
+the start, and a claim about a gait should survive most starts, not every one.
+
+Each claim is a dict {"id", "claim", "values", "holds", "verdict", "ensemble", "details"}:
+``values`` is {gait: {"mean", "spread": [min, max]}} of the claim's statistic over the members
+evaluated, ``holds`` True / False / None (undecided, ties, not tested), ``ensemble`` {"n",
+"holds", "fraction", "left_out"}, ``details`` the thresholds and resolutions used. The MuJoCo
+comparison adds its own entries (``mujoco_check.claims``).
 """
 
 from __future__ import annotations
+
+import math
+from fractions import Fraction
 
 import numpy as np
 
 from .. import analysis
 
 ROLLING = ("C", "S", "J", "J-mirror")
+SIDEWINDING = "sidewinding"
+HOLDS_AT = 0.8  # fraction of members for "holds"
+FAILS_AT = 0.2  # fraction of members at or below which it "does not hold"
+RESOLUTION = 1e-3  # a box displacement resolved [m]
+IMPULSE_SHARE = 0.01  # NI: impacts' mean force / m g
+MIN_PHASE_CORRELATION = 0.7  # PS
+MIN_PHASE_LAG = 0.05  # PS: a nonzero lag [periods]
+GOAL_ANGLE_DEG = 30.0  # GT
+DIRECTION_MARGIN_DEG = 5.0  # MJ-C
 
 
-def _rank_claim(cid, text, numbers, winner, largest=True):
-    """``winner`` has the largest (or smallest) of ``numbers`` {gait: value}."""
-    if winner not in numbers or len(numbers) < 2:
-        return {"id": cid, "claim": text, "values": numbers, "holds": None}
-    others = [v for g, v in numbers.items() if g != winner]
-    holds = numbers[winner] > max(others) if largest else numbers[winner] < min(others)
-    return {"id": cid, "claim": text, "values": numbers, "holds": bool(holds)}
+# --- ensemble bookkeeping ---------------------------------------------------------------------------------------
 
 
-def paper_claims(summaries: dict) -> list[dict]:
-    """The claims E, WB, EN, PP, SL, MJ (module docstring) from {gait: analysis.summary(traj)}.
+def _usable(s: dict, keys) -> bool:
+    for k in keys:
+        v = s.get(k)
+        if v is None:
+            return False
+        if isinstance(v, float) and math.isnan(v):
+            return False
+    return True
 
-    Helper: each claim's number is a field of ``analysis.summary``; nothing is typed in.
-    """
-    s = {g: v for g, v in summaries.items() if not v.get("error")}
-    pick = lambda key: {g: s[g][key] for g in s}  # noqa: E731
-    out = []
-    slope = pick("efficiency_slope")
-    need = ("S", "J", "C", "sidewinding")
-    holds = None
-    if all(g in slope for g in need):
-        holds = bool(max(slope["S"], slope["J"]) < min(slope["C"], slope["sidewinding"]))
-    out.append({"id": "E", "claim": "S and J rolling are more efficient than C and sidewinding "
-                                    "(lower slope W_loc / W_box, fig. 6)", "values": slope, "holds": holds})
-    out.append(_rank_claim("WB", "sidewinding does the most work on the box (W_box, J)",
-                           pick("box_work"), "sidewinding"))
-    out.append(_rank_claim("EN", "sidewinding uses the most energy for locomotion (W_loc, J)",
-                           pick("locomotion_work"), "sidewinding"))
-    out.append(_rank_claim("PP", "sidewinding has the largest peaks of locomotion power (max |P_loc|, W)",
-                           pick("peak_abs_power"), "sidewinding"))
-    out.append(_rank_claim("SL", "the steady rolling gaits are slower: each moves the box less far than "
-                                 "sidewinding in the same time (box distance, m, fig. 9)",
-                           pick("box_distance"), "sidewinding"))
-    disp = {g: s[g]["box_displacement"] for g in ("J", "J-mirror") if g in s}
-    holds = None
-    if len(disp) == 2:
-        y_J, y_M = disp["J"][1], disp["J-mirror"][1]
-        holds = bool(y_J * y_M < 0 and min(abs(y_J), abs(y_M)) > 1e-3)
-    out.append({"id": "MJ", "claim": "the mirrored J moves the box to the other side (sideways box "
-                                     "displacement y, m, of opposite signs, each > 1 mm)",
-                "values": disp, "holds": holds})
-    failed = {g: v["error"] for g, v in summaries.items() if v.get("error")}
-    if failed:
-        for c in out:
-            c["values"] = {"numbers": c["values"], "failed runs (left out)": failed}
+
+def _failed_runs(ensemble: dict, gaits) -> dict:
+    """{"gait[i]": error} of the runs with an error among ``gaits``."""
+    return {f"{g}[{i}]": s["error"] for g in gaits if g in ensemble
+            for i, s in enumerate(ensemble[g]) if s.get("error")}
+
+
+def _ok(s: dict, keys) -> bool:
+    return not s.get("error") and _usable(s, keys)
+
+
+def _scenarios(ensemble: dict, gaits, keys) -> list[int]:
+    """The scenarios i at which every gait of ``gaits`` has a member without error and with ``keys``."""
+    if not gaits or any(g not in ensemble for g in gaits):
+        return []
+    n = min(len(ensemble[g]) for g in gaits)
+    return [i for i in range(n) if all(_ok(ensemble[g][i], keys) for g in gaits)]
+
+
+def _own_values(ensemble: dict, gaits, key: str, statistic=None) -> dict:
+    """{gait: mean and spread} of ``statistic(summary)`` (default ``summary[key]``) over each gait's
+    own usable members: the numbers shown when no scenario has every gait."""
+    statistic = statistic or (lambda s: s[key])
+    out = {}
+    for g in gaits:
+        v = [statistic(s) for s in ensemble.get(g, []) if _ok(s, [key])]
+        if v:
+            out[g] = _stats(v)
     return out
 
 
+def _stats(values) -> dict:
+    v = [float(x) for x in values if not (isinstance(x, float) and math.isnan(x))]
+    if not v:
+        return {"mean": float("nan"), "spread": [float("nan"), float("nan")]}
+    return {"mean": float(np.mean(v)), "spread": [float(min(v)), float(max(v))]}
+
+
+def verdict(n: int, n_holds: int) -> tuple:
+    """(holds, verdict) of a claim that held for ``n_holds`` of ``n`` members.
+
+    Helper: the 80/20 rule of the module docstring: holds when n_holds >= 0.8 n, does not hold
+    when n_holds <= 0.2 n (``HOLDS_AT``, ``FAILS_AT``; compared as exact fractions, so 4 of 5 is
+    80 %), undecided between, not tested when n = 0.
+    """
+    if n == 0:
+        return None, "not tested"
+    share = Fraction(n_holds, n)
+    if share >= Fraction(HOLDS_AT).limit_denominator(100):
+        return True, "holds"
+    if share <= Fraction(FAILS_AT).limit_denominator(100):
+        return False, "does not hold"
+    return None, "undecided"
+
+
+def _entry(cid, text, values, results, failed, details=None, reason=""):
+    """A claim dict from per-member booleans ``results``."""
+    n, k = len(results), int(sum(bool(r) for r in results))
+    holds, word = verdict(n, k)
+    details = dict(details or {})
+    if n == 0:
+        details["not tested because"] = reason or "no member could be evaluated"
+    return {"id": cid, "claim": text, "values": values, "holds": holds, "verdict": word,
+            "ensemble": {"n": n, "holds": k, "fraction": (k / n) if n else None, "left_out": failed},
+            "details": details}
+
+
+# --- the claims ------------------------------------------------------------------------------------------------
+
+
+def _rank(ensemble, cid, text, key, winner=SIDEWINDING, largest=True):
+    """``winner``'s ``key`` is larger (smaller) than every other gait's, per scenario."""
+    gaits = list(ensemble)
+    failed = _failed_runs(ensemble, gaits)
+    if winner not in ensemble or len(gaits) < 2:
+        return _entry(cid, text, _own_values(ensemble, gaits, key), [], failed,
+                      reason=f"needs {winner} and another gait")
+    idx = _scenarios(ensemble, gaits, [key])
+    values = {g: _stats([ensemble[g][i][key] for i in idx]) for g in gaits} if idx else _own_values(ensemble, gaits, key)
+    results = []
+    for i in idx:
+        w = ensemble[winner][i][key]
+        others = [ensemble[g][i][key] for g in gaits if g != winner]
+        results.append(w > max(others) if largest else w < min(others))
+    return _entry(cid, text, values, results, failed, reason=f"no scenario with every gait's {key}")
+
+
+def _efficiency(ensemble):
+    text = ("S and J rolling are more efficient than C and sidewinding: per scenario, max(slope S, J) < "
+            "min(slope C, sidewinding), slope = W_loc / W_box over the push [J/J] (fig. 6); 'ties' when the "
+            "ensemble spreads of S or J and of C or sidewinding overlap")
+    better, worse = ("S", "J"), ("C", SIDEWINDING)
+    gaits = better + worse
+    failed = _failed_runs(ensemble, gaits)
+    idx = _scenarios(ensemble, gaits, ["efficiency_slope"])
+    values = {g: _stats([ensemble[g][i]["efficiency_slope"] for i in idx]) for g in gaits if g in ensemble} if idx \
+        else _own_values(ensemble, gaits, "efficiency_slope")
+    slope = {g: [ensemble[g][i]["efficiency_slope"] for i in idx] for g in gaits if g in ensemble}
+    results = [max(slope["S"][k], slope["J"][k]) < min(slope["C"][k], slope[SIDEWINDING][k])
+               for k in range(len(idx))]
+    entry = _entry("E", text, values, results, failed, reason="needs S, J, C and sidewinding")
+    if idx:
+        overlap = [(b, w) for b in better for w in worse
+                   if min(slope[b]) <= max(slope[w]) and min(slope[w]) <= max(slope[b])]
+        entry["details"]["overlapping spreads"] = [f"{b} / {w}" for b, w in overlap]
+        if overlap:
+            entry["holds"], entry["verdict"] = None, "ties"
+    return entry
+
+
+def _mirror(ensemble):
+    text = (f"J-mirror moves the box as J reflected in x: per scenario |x_J - x_M| <= s_x + {1e3 * RESOLUTION:g} mm, "
+            f"|y_J + y_M| <= s_y + {1e3 * RESOLUTION:g} mm (s: spread of J's displacements), and y_J, y_M of "
+            f"opposite signs, each beyond {1e3 * RESOLUTION:g} mm (sideways box displacement y [m])")
+    gaits = ("J", "J-mirror")
+    failed = _failed_runs(ensemble, gaits)
+    idx = _scenarios(ensemble, gaits, ["box_displacement"])
+    dJ = np.array([ensemble["J"][i]["box_displacement"] for i in idx], dtype=float).reshape(-1, 2)
+    dM = np.array([ensemble["J-mirror"][i]["box_displacement"] for i in idx], dtype=float).reshape(-1, 2)
+    values = {g: _stats(d[:, 1]) for g, d in (("J", dJ), ("J-mirror", dM))} if idx \
+        else _own_values(ensemble, gaits, "box_displacement", lambda s: s["box_displacement"][1])
+    results, details = [], {}
+    if idx:
+        s = np.ptp(dJ, axis=0)
+        tol = s + RESOLUTION
+        details = {"tolerance_x_m": float(tol[0]), "tolerance_y_m": float(tol[1])}
+        for (xJ, yJ), (xM, yM) in zip(dJ, dM):
+            results.append(bool(abs(xJ - xM) <= tol[0] and abs(yJ + yM) <= tol[1] and yJ * yM < 0
+                                and min(abs(yJ), abs(yM)) > RESOLUTION))
+    return _entry("MJ", text, values, results, failed, details, reason="needs J and J-mirror")
+
+
+def _angle_deg(a, b) -> float:
+    """The angle between two plane vectors [deg]; nan when either is zero."""
+    na, nb = math.hypot(*a), math.hypot(*b)
+    if na == 0 or nb == 0:
+        return float("nan")
+    c = (a[0] * b[0] + a[1] * b[1]) / (na * nb)
+    return math.degrees(math.acos(max(-1.0, min(1.0, c))))
+
+
+def directions(displacements) -> tuple:
+    """(mean direction [deg], deviations [deg], half-spread [deg]) of plane displacements longer
+    than ``RESOLUTION``: the mean direction is that of the sum of their unit vectors, each
+    deviation the signed angle from it in (-180, 180], the half-spread (max - min) / 2 of the
+    deviations. (nan, [], nan) when none is longer.
+
+    Helper: the angular spread of an ensemble's box pushes (claim MJ-C).
+    """
+    d = np.array([x for x in displacements if math.hypot(*x) > RESOLUTION], dtype=float).reshape(-1, 2)
+    if not len(d):
+        return float("nan"), [], float("nan")
+    u = d / np.linalg.norm(d, axis=1)[:, None]
+    mean = math.atan2(u[:, 1].sum(), u[:, 0].sum())
+    dev = np.degrees((np.arctan2(u[:, 1], u[:, 0]) - mean + np.pi) % (2 * np.pi) - np.pi)
+    return math.degrees(mean), [float(x) for x in dev], float(np.ptp(dev) / 2)
+
+
+def _steering(ensemble):
+    text = (f"J steers the box in a direction different from C's: per scenario the angle between their box "
+            f"displacements exceeds h_J + h_C + {DIRECTION_MARGIN_DEG:g} deg (h: each ensemble's angular "
+            f"half-spread; box direction [deg])")
+    gaits = ("J", "C")
+    failed = _failed_runs(ensemble, gaits)
+    idx = _scenarios(ensemble, gaits, ["box_displacement"])
+    d = {g: [ensemble[g][i]["box_displacement"] for i in idx] for g in gaits}
+    results, details = [], {}
+    values = _own_values(ensemble, gaits, "box_displacement",
+                         lambda s: math.degrees(math.atan2(s["box_displacement"][1], s["box_displacement"][0])))
+    if idx:
+        dirs = {g: directions(d[g]) for g in gaits}
+        values = {g: _stats([dirs[g][0] + x for x in dirs[g][1]]) for g in gaits}
+        half = {g: dirs[g][2] for g in gaits}
+        threshold = (half["J"] if half["J"] == half["J"] else 0.0) + (half["C"] if half["C"] == half["C"] else 0.0) \
+            + DIRECTION_MARGIN_DEG
+        mean_angle = float("nan")
+        if dirs["J"][0] == dirs["J"][0] and dirs["C"][0] == dirs["C"][0]:
+            mean_angle = abs((dirs["J"][0] - dirs["C"][0] + 180.0) % 360.0 - 180.0)
+        details = {"half_spread_J_deg": half["J"], "half_spread_C_deg": half["C"], "threshold_deg": threshold,
+                   "angle_between_mean_directions_deg": mean_angle}
+        for a, b in zip(d["J"], d["C"]):
+            moved = math.hypot(*a) > RESOLUTION and math.hypot(*b) > RESOLUTION
+            results.append(bool(moved and _angle_deg(a, b) > threshold))
+    return _entry("MJ-C", text, values, results, failed, details, reason="needs J and C")
+
+
+def _per_run(ensemble, cid, text, keys, statistic, condition, details=None, gaits=None):
+    """A claim about each run: ``condition(summary)`` per member of every gait (``gaits``, default
+    all), ``statistic(summary)`` its number."""
+    gaits = list(ensemble) if gaits is None else [g for g in gaits if g in ensemble]
+    failed = _failed_runs(ensemble, gaits)
+    values, results = {}, []
+    for g in gaits:
+        members = [s for s in ensemble[g] if _ok(s, keys)]
+        if members:
+            values[g] = _stats([statistic(s) for s in members])
+            results += [bool(condition(s)) for s in members]
+    return _entry(cid, text, values, results, failed, details, reason=f"no run with {', '.join(keys)}")
+
+
+def _phase_ok(s) -> bool:
+    corr = np.nan_to_num(np.asarray(s["joint_phase_correlation"], dtype=float), nan=0.0)
+    lags = np.nan_to_num(np.asarray(s["joint_phase_lags"], dtype=float), nan=0.0)
+    return bool(np.all(corr >= MIN_PHASE_CORRELATION) and np.any(np.abs(lags) >= MIN_PHASE_LAG))
+
+
+def _phase_stat(s) -> float:
+    return float(np.min(np.nan_to_num(np.asarray(s["joint_phase_correlation"], dtype=float), nan=0.0)))
+
+
+def _has_phase(s) -> bool:
+    return not all(isinstance(c, float) and math.isnan(c) for c in s.get("joint_phase_correlation") or [float("nan")])
+
+
+def _goal_angle(s) -> float:
+    return _angle_deg(s["box_displacement"], s["goal_direction"])
+
+
+def ensemble_claims(ensemble: dict) -> list[dict]:
+    """The claims of the module docstring, each evaluated per member of ``ensemble`` {gait: [summary, ...]}.
+
+    Helper: ``ensemble[gait][i]`` is member (scenario) i's ``analysis.summary`` plus the fields of
+    ``gait_summaries`` and optionally ``goal_direction``; the verdicts follow the 80/20 rule.
+    """
+    ensemble = {g: list(v) for g, v in ensemble.items()}
+    out = [_efficiency(ensemble),
+           _rank(ensemble, "WB", "sidewinding does the most work on the box: per scenario its W_box [J] is "
+                                 "larger than every other gait's", "box_work"),
+           _rank(ensemble, "EN", "sidewinding uses the most energy for locomotion: per scenario its W_loc [J] is "
+                                 "the largest", "locomotion_work"),
+           _rank(ensemble, "PP", "sidewinding has the largest peaks of locomotion power: per scenario its "
+                                 "max |P_loc| [W] is the largest (fig. 7)", "peak_abs_power"),
+           _rank({g: v for g, v in ensemble.items() if g in ROLLING or g == SIDEWINDING}, "SP",
+                 "the rolling gaits consume power more steadily than sidewinding: per scenario each one's "
+                 "coefficient of variation of |P_loc| after the ramp is below sidewinding's (fig. 7)", "power_cv"),
+           _rank(ensemble, "SL", "the steady rolling gaits are slower: per scenario each moves the box less far "
+                                 "than sidewinding in the same time (box distance [m], fig. 9)", "box_distance"),
+           _mirror(ensemble),
+           _steering(ensemble)]
+    ni_keys = ["impact_impulse_per_second", "robot_weight"]
+    out.append(_per_run(
+        ensemble, "NI", f"non-impulsive contact: each run's impact impulse per second is at most "
+                        f"{100 * IMPULSE_SHARE:g} % of the robot's weight m g (impulse rate / m g)",
+        ni_keys, lambda s: s["impact_impulse_per_second"] / s["robot_weight"],
+        lambda s: s["impact_impulse_per_second"] <= IMPULSE_SHARE * s["robot_weight"],
+        {"share_of_weight": IMPULSE_SHARE}))
+    out.append(_per_run(
+        ensemble, "TL", "the torque limit |tau| <= tau_max (eq. (6), constraint (3)) holds at every step of each "
+                        "run (share of steps over tau_max)",
+        ["steps_over_torque_limit"], lambda s: s["steps_over_torque_limit"],
+        lambda s: s["steps_over_torque_limit"] == 0))
+    phase_ensemble = {g: [dict(s, joint_phase_correlation=None) if not _has_phase(s) else s for s in v]
+                      for g, v in ensemble.items()}
+    out.append(_per_run(
+        phase_ensemble, "PS", f"the joints' torques are one profile shifted in phase (fig. 8): each run's every "
+                              f"joint correlates with J0 at some lag within +-1/2 period with a peak normalized "
+                              f"cross-correlation >= {MIN_PHASE_CORRELATION:g}, and some lag is beyond "
+                              f"{MIN_PHASE_LAG:g} period (smallest peak correlation)",
+        ["joint_phase_correlation", "joint_phase_lags"], _phase_stat, _phase_ok,
+        {"min_correlation": MIN_PHASE_CORRELATION, "min_lag_periods": MIN_PHASE_LAG}))
+    goal_ensemble = {g: [s for s in v if s.get("goal_direction") is not None or s.get("error")]
+                     for g, v in ensemble.items()}
+    goal_ensemble = {g: v for g, v in goal_ensemble.items() if any(s.get("goal_direction") is not None for s in v)}
+    out.append(_per_run(
+        goal_ensemble, "GT", f"the box moves towards the specified point: the angle between its displacement and "
+                             f"the goal direction is at most {GOAL_ANGLE_DEG:g} deg, the box moved beyond "
+                             f"{1e3 * RESOLUTION:g} mm (angle [deg])",
+        ["box_displacement", "goal_direction"], _goal_angle,
+        lambda s: math.hypot(*s["box_displacement"]) > RESOLUTION and _goal_angle(s) <= GOAL_ANGLE_DEG,
+        {"max_angle_deg": GOAL_ANGLE_DEG}))
+    if not goal_ensemble:
+        out[-1]["details"]["not tested because"] = "no run has a goal_direction"
+    return out
+
+
+def paper_claims(summaries: dict) -> list[dict]:
+    """The claims of ``ensemble_claims`` for one member per gait, from {gait: analysis.summary(traj)}.
+
+    Helper: each claim's number is a field of ``analysis.summary``; nothing is typed in.
+    """
+    return ensemble_claims({g: [s] for g, s in summaries.items()})
+
+
 def gait_summaries(results: dict) -> dict:
-    """{gait: analysis.summary(traj)} plus each run's error (empty if it completed).
+    """{gait: analysis.summary(traj)} plus each run's error (empty if it completed), largest
+    penetration and friction-cone residual, the share of steps over tau_max, and the goal
+    direction when the trajectory's ``meta`` has one.
 
     Helper: the numbers behind ``paper_claims`` and the model-health table of ``claims.md``.
     """
@@ -92,12 +401,31 @@ def gait_summaries(results: dict) -> dict:
         out[g]["max_penetration"] = float(np.max(traj.steps["max_penetration"], initial=0.0))
         out[g]["max_cone_residual"] = float(np.max(traj.steps["cone_residual"], initial=0.0))
         out[g]["steps_over_torque_limit"] = float(np.mean(traj.steps["tau_excess"] > 0)) if len(traj.tau) else 0.0
+        goal = (traj.meta or {}).get("goal_direction")
+        if goal is not None:
+            out[g]["goal_direction"] = [float(x) for x in goal]
     return out
 
 
+def ensemble_summaries(members: list[dict]) -> dict:
+    """{gait: [summary of member 0, member 1, ...]} from a list of {gait: trajectory}, one dict per
+    scenario; a gait missing from a member gets the summary {"error": "no run"} so that index i
+    stays scenario i.
+
+    Helper: the input of ``ensemble_claims`` (``gait_summaries`` per member; a trajectory's
+    ``meta["goal_direction"]``, when set, becomes the summary's ``goal_direction``).
+    """
+    per_member = [gait_summaries(m) for m in members]
+    gaits = list(dict.fromkeys(g for m in per_member for g in m))
+    return {g: [m.get(g, {"error": "no run"}) for m in per_member] for g in gaits}
+
+
 def _fmt(v) -> str:
-    if isinstance(v, float):
-        return "inf" if np.isinf(v) else f"{v:.4g}"
+    if isinstance(v, bool) or v is None:
+        return str(v)
+    if isinstance(v, (float, np.floating)):
+        v = float(v)
+        return "nan" if v != v else ("inf" if np.isinf(v) else f"{v:.4g}")
     if isinstance(v, (list, tuple)):
         return "(" + ", ".join(_fmt(x) for x in v) + ")"
     if isinstance(v, dict):
@@ -105,31 +433,76 @@ def _fmt(v) -> str:
     return str(v)
 
 
+def _cell(text: str) -> str:
+    """``text`` safe inside a Markdown table cell (its | escaped)."""
+    return str(text).replace("|", "\\|")
+
+
+def _mean_spread(st: dict) -> str:
+    lo, hi = st["spread"]
+    if lo == hi:
+        return _fmt(st["mean"])  # one member, or all alike
+    return f"{_fmt(st['mean'])} [{_fmt(lo)}, {_fmt(hi)}]"
+
+
+TABLE = (("duration", "T (s)", 1.0), ("locomotion_work", "W_loc (J)", 1.0), ("box_work", "W_box (J)", 1.0),
+         ("efficiency_slope", "slope", 1.0), ("peak_abs_power", "peak abs(P) (W)", 1.0),
+         ("power_cv", "CV of abs(P)", 1.0), ("box_distance", "box moved (m)", 1.0),
+         ("impact_impulse_per_second", "impact impulse/s (N)", 1.0),
+         ("fixed_point_converged", "fixed point converged (%)", 100.0),
+         ("steps_over_torque_limit", "steps over tau_max (%)", 100.0), ("max_penetration", "max penetration (m)", 1.0))
+
+
 def to_markdown(claims: list[dict], summaries: dict, settings: dict) -> str:
-    """``claims.md``: the claims with their numbers and verdicts, then the per-gait numbers and
-    the health of each run (fixed-point convergence, torque limit, penetration), then the settings.
+    """``claims.md``: the claims with their per-gait numbers, the members evaluated and holding,
+    and the verdicts; then per gait the mean [min, max] over the members of the summary's
+    numbers and the runs' health (fixed-point convergence, torque limit, penetration), the
+    failed runs, and the settings. ``summaries`` is {gait: [summary, ...]} or {gait: summary}.
 
     Helper: the human-readable claims report.
     """
-    verdict = {True: "holds", False: "does NOT hold", None: "not tested"}
+    ens = {g: (list(v) if isinstance(v, (list, tuple)) else [v]) for g, v in summaries.items()}
     lines = ["# Claims of [COBRA] checked in cobra_ref", "",
              "Generated by `cobra-ref figures`; every number is computed from the simulations in this run "
-             "(definitions: `cobra_ref/analysis.py`, assumption A18).", "",
-             "| id | claim | our numbers | verdict |", "|---|---|---|---|"]
+             "(definitions: `cobra_ref/analysis.py`, assumption A18; the claims and their thresholds: "
+             "`cobra_ref/reproduce/claims.py`). A claim is evaluated per ensemble member (per scenario when it "
+             "compares gaits); it holds when it holds for >= 80 % of them, does not hold when for <= 20 %, and is "
+             "undecided between.", "",
+             "| id | claim | per gait: mean [min, max] | n | members holding | verdict |", "|---|---|---|---|---|---|"]
     for c in claims:
-        lines.append(f"| {c['id']} | {c['claim']} | {_fmt(c['values'])} | **{verdict[c['holds']]}** |")
-    lines += ["", "## Per gait", "",
-              "| gait | T (s) | W_loc (J) | W_box (J) | slope | peak abs(P) (W) | box moved (m) | "
-              "fixed point converged | steps over tau_max | max penetration (m) | error |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for g, v in summaries.items():
-        lines.append(f"| {g} | {v['duration']:.2f} | {v['locomotion_work']:.3g} | {v['box_work']:.3g} | "
-                     f"{_fmt(v['efficiency_slope'])} | {v['peak_abs_power']:.3g} | {v['box_distance']:.3g} | "
-                     f"{100 * v['fixed_point_converged']:.0f} % | {100 * v['steps_over_torque_limit']:.1f} % | "
-                     f"{v['max_penetration']:.2g} | {v['error'] or ''} |")
+        word = c.get("verdict") or {True: "holds", False: "does not hold", None: "not tested"}[c["holds"]]
+        e = c.get("ensemble") or {}
+        vals = c.get("values") or {}
+        if vals and all(isinstance(v, dict) and "mean" in v for v in vals.values()):
+            shown = "; ".join(f"{g}: {_mean_spread(v)}" for g, v in vals.items())
+        else:
+            shown = _fmt(vals)
+        notes = [f"{k}: {_fmt(v)}" for k, v in (c.get("details") or {}).items() if v not in ([], {}, None)]
+        if e.get("left_out"):
+            notes.append("left out: " + _fmt(e["left_out"]))
+        if notes:
+            shown += " (" + "; ".join(notes) + ")"
+        n = e.get("n", "")
+        held = e.get("holds", "")
+        lines.append(f"| {c['id']} | {_cell(c['claim'])} | {_cell(shown)} | {n} | {held} | **{word}** |")
+    lines += ["", "## Per gait (mean [min, max] over the members that completed)", "",
+              "| gait | members (completed / all) | " + " | ".join(h for _, h, _ in TABLE) + " |",
+              "|---|---|" + "---|" * len(TABLE)]
+    failed = []
+    for g, members in ens.items():
+        ok = [s for s in members if not s.get("error")]
+        failed += [f"{g}[{i}]: {_cell(s['error'])}" for i, s in enumerate(members) if s.get("error")]
+        cells = []
+        for key, _, scale in TABLE:
+            v = [scale * float(s[key]) for s in ok if s.get(key) is not None]
+            cells.append(_mean_spread(_stats(v)) if v else "")
+        lines.append(f"| {g} | {len(ok)} / {len(members)} | " + " | ".join(cells) + " |")
+    if failed:
+        lines += ["", "Failed runs (left out of every claim):", ""] + [f"- {f}" for f in failed]
     lines += ["", "## Settings", ""] + [f"- {k}: {_fmt(v)}" for k, v in settings.items()]
-    lines += ["", "Model choices that change these outcomes (README, 'Pushing the box'): the robot-box "
-              "friction mu_rb = 0.5 (assumption C22; at mu_rb = 1 the rolling push self-locks), the box "
-              "placement per gait (cobra_ref/reproduce.py), prescribed joint motion (torques are recovered, "
-              "never clipped: 'steps over tau_max')."]
+    lines += ["", "Model choices that change these outcomes: the robot-box "
+              "friction mu_rb = 0.5 (assumption A22; at mu_rb = 1 the rolling push self-locks), the box "
+              "placement per gait (assumption A9, cobra_ref/start.py), and the joints, position servos whose "
+              "torque is clamped at tau_max (assumption A7: 'steps over tau_max' counts the steps where the "
+              "clamp was exceeded)."]
     return "\n".join(lines) + "\n"
