@@ -264,7 +264,7 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
                 "box direction (sidewinding)": results["sidewinding"].meta.get("box_direction")
                 if "sidewinding" in results else None}
     if mujoco:
-        report += _mujoco_rows(specs, runs, T, out_dir, cache_dir, progress, files)
+        report += _mujoco_rows(specs, runs, T, out_dir, cache_dir, progress, files, force)
     paths = {"claims.json": json.dumps(_clean(report), indent=1),
              "claims.md": claims_mod.to_markdown(report, summaries, settings),
              "summary.json": json.dumps(_clean({"gaits": summaries, "ensemble": ensemble, "settings": settings}),
@@ -294,7 +294,7 @@ def ensemble_report(ensemble: dict) -> list[dict]:
     return report
 
 
-def _mujoco_rows(specs, runs, window_s, out_dir, cache_dir, progress, files) -> list[dict]:
+def _mujoco_rows(specs, runs, window_s, out_dir, cache_dir, progress, files, force: bool = False) -> list[dict]:
     """The MuJoCo comparison as claims, and its figure; empty, with a note on stderr, when mujoco
     is not installed (it is an optional extra).
 
@@ -302,7 +302,9 @@ def _mujoco_rows(specs, runs, window_s, out_dir, cache_dir, progress, files) -> 
     simulators; (b) per gait the first K = min(N, ``MUJOCO_MEMBERS``) members, each from its own
     settled start (q0, qd0) with its own friction scale, the box displacement after
     ``BOX_DURATION`` seconds (or the ensemble window if shorter), ours read off the member's run.
-    Every row is cached in ``cache_dir`` under a hash of its inputs (``_mujoco_key``).
+    Every row is cached in ``cache_dir`` under a hash of its inputs (``_mujoco_key``); the figure
+    is kept when its rows came from the cache and it was drawn from them (``.stamps.json``);
+    ``force`` computes and draws everything again.
     """
     from .mujoco_check import claims, mujoco_available
 
@@ -318,7 +320,7 @@ def _mujoco_rows(specs, runs, window_s, out_dir, cache_dir, progress, files) -> 
     boxed = {g: [m for m in members[:k] if not runs[m].error] for g, members in done.items()}
     key = _mujoco_key(boxed, runs, duration)
     cached = os.path.join(cache_dir, f"mujoco-{key[:16]}.json")
-    rows = _read_json(cached).get("rows") if os.path.isfile(cached) else None
+    rows = _read_json(cached).get("rows") if os.path.isfile(cached) and not force else None
     if rows is None:
         rows = _mujoco_compute(boxed, runs, duration)
         os.makedirs(cache_dir, exist_ok=True)
@@ -326,9 +328,18 @@ def _mujoco_rows(specs, runs, window_s, out_dir, cache_dir, progress, files) -> 
         what = "computed"
     else:
         what = "from the cache"
-    from .figures.fig_mujoco_check import make as make_figure
+    from .figures import fig_mujoco_check
 
-    files += make_figure(rows, out_dir)
+    stamps_path = os.path.join(out_dir, ".stamps.json")
+    stamps, stamp = _read_json(stamps_path), _stamp({"mujoco": key}, fig_mujoco_check)
+    old = stamps.get("fig_mujoco_check", {})
+    if what == "from the cache" and old.get("stamp") == stamp and all(os.path.isfile(f) for f in old.get("files", [])):
+        files += old["files"]
+    else:
+        written = fig_mujoco_check.make(rows, out_dir)
+        stamps["fig_mujoco_check"] = {"stamp": stamp, "files": written}
+        write_text(stamps_path, json.dumps(stamps, indent=1))
+        files += written
     _say(progress, f"  MuJoCo comparison: {len(done)} gaits x {k} member(s), {what}, {time.perf_counter() - t0:.1f} s")
     return claims(rows)
 

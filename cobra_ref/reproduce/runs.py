@@ -225,6 +225,7 @@ def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = No
     """
     specs = list(specs)
     todo = list(dict.fromkeys(s for s in specs if force or not cached_path(s, cache_dir)))
+    todo.sort(key=lambda s: -s.duration)  # the longest runs first: no core waits alone for one at the end
     if todo:
         workers = workers or min(len(todo), os.cpu_count() or 1)
         if executor is not None:
