@@ -86,7 +86,8 @@ def add_parsers(sub) -> None:
     Helper: the command line (cobra-ref figures).
     """
     p = sub.add_parser("figures", help="regenerate the paper's figures 3-9, GIFs and the claims report",
-                       description="Simulate the five gaits (10 s each; 1 s with --quick; with the optimized "
+                       description="Simulate the five gaits, each as an ensemble of --members runs (member 0: 10 s, "
+                                   "the others 2 s; 1 s each with --quick; with the optimized "
                                    "parameters of cobra_ref/optimized/ where present) on all cores, or read "
                                    "them from the cache, and write fig03_snapshots.png ... fig09_box_distance.png "
                                    "(+ PDF), anim_<gait>.gif, claims.json, claims.md and summary.json to --out. "

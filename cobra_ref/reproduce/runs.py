@@ -1,14 +1,18 @@
-"""Run the paper's gaits for the figures: one simulation per gait, cached, both cores in use.
+"""Run the paper's gaits for the figures: one simulation per gait and ensemble member, cached, on any executor.
 
 Helper: the simulation half of ``cobra-ref figures`` ([COBRA] sec. "Results", figs. 3-9).
 
-Each gait run is a ``RunSpec``: the gait's name and parameters, the duration, dt and the robot-box
-friction. Its result is the ``Trajectory`` NPZ of ``cobra-ref simulate``, stored in the cache
-directory under ``<gait>-<key>.npz``, where key = SHA-256 of every input: the spec, the model
-parameters (``CobraParameters``), the stepper settings and the source code of every module the
-simulation runs (so editing the physics invalidates the cache, editing a figure does not).
-A run that fails mid-way is stored as ``<gait>-<key>.failed.npz`` with what it computed and its
-error, and the figures use that partial trajectory (the claims report says so).
+Each run is a ``RunSpec``: the gait's name and parameters, the duration, dt, the robot-box
+friction and the ensemble member (``ensemble.Member``: box shift and turn, phase shift, friction
+scale; None for the nominal run). Its result is the ``Trajectory`` NPZ of ``cobra-ref simulate``,
+stored in the cache directory under ``<gait>[-m<i>]-<key>.npz``, where key = SHA-256 of every
+input: the spec, the model parameters (``CobraParameters``), the stepper settings and the
+source code of every module the simulation runs (so editing the physics invalidates the cache,
+editing a figure does not). A nominal member adds nothing to the key: member 0 is the nominal run.
+A run that fails mid-way is stored as ``<name>.failed.npz`` with what it computed and its error,
+and the figures use that partial trajectory (the claims report says so). ``run_all`` sends the
+runs to any ``concurrent.futures.Executor`` and reads every result back from the cache, so the
+numbers do not depend on where the runs ran.
 
 Box placement per gait (assumption C9, extended):
 
@@ -19,6 +23,10 @@ Box placement per gait (assumption C9, extended):
   from the middle link in the direction the gait *travels*: the horizontal displacement of the
   robot's centre of mass in a box-free run of the same gait over two periods (``travel_direction``,
   computed and cached with the run, reported in the trajectory's ``meta``).
+
+An ensemble member's box is placed by the same rule (for sidewinding, from a box-free run of the
+member's own gait, its phase shifted), then shifted by ``box_shift`` and turned by ``box_turn``
+(``start.placed_state``); its frictions are scaled by ``mu_scale``.
 """
 
 from __future__ import annotations
