@@ -26,15 +26,18 @@ SETTLE_SPEED = 1e-2  # [m/s, rad/s] until no coordinate moves faster (below the 
 
 
 def initial_state(model: Model, reference, settings: StepSettings = StepSettings(), box_offset=None,
-                  box_gap: float = 0.05, box_direction=None, settle: bool = True, box_yaw=None):
+                  box_gap: float = 0.05, box_direction=None, settle: bool = True, box_yaw=None, box_shift=None,
+                  box_turn: float = 0.0):
     """(q0, qd0): the scene placed (``placed_state``) and, with ``settle``, settled (module docstring).
 
     Implements: the start at rest (assumption A25): the joints hold the reference's t = 0
     shape while the robot and the box come to rest on the ground under ``settings``' contact
     law and servo; what is left of their motion (below SETTLE_SPEED) is returned as qd0.
-    ``box_offset``, ``box_gap``, ``box_direction`` and ``box_yaw``: see ``placed_state``.
+    ``box_offset``, ``box_gap``, ``box_direction``, ``box_yaw``, ``box_shift`` and ``box_turn``:
+    see ``placed_state``.
     """
-    q = placed_state(model, reference, box_offset, box_gap, box_direction=box_direction, box_yaw=box_yaw)
+    q = placed_state(model, reference, box_offset, box_gap, box_direction=box_direction, box_yaw=box_yaw,
+                     box_shift=box_shift, box_turn=box_turn)
     qd = np.zeros(model.nv)
     if settle:
         from .fast.stepper import FastStepper
@@ -62,7 +65,7 @@ class _Hold:
 
 
 def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05, clearance: float = 0.0,
-                 box_direction=None, box_yaw=None) -> np.ndarray:
+                 box_direction=None, box_yaw=None, box_shift=None, box_turn: float = 0.0) -> np.ndarray:
     """q of the robot in the reference's t = 0 shape, head at the origin facing +x, lowest sphere
     ``clearance`` above the ground (default: touching it); the box flat on the ground beside the middle of the snake
     (assumption A9). ``initial_state`` lets this settle.
@@ -88,6 +91,10 @@ def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05
     ``box_offset`` = (dx, dy) [m] instead puts the box centre at m + (dx, dy) (world axes),
     axis-aligned; ``box_yaw`` [rad] turns the box about the vertical to that heading (world
     axes; by default the placement's own: facing the robot, or 0 with ``box_offset``).
+
+    After the placement, ``box_shift`` = (dx, dy) [m] (world axes) is added to the box's centre
+    and ``box_turn`` [rad] to its yaw (an ensemble member's perturbation,
+    ``reproduce.ensemble``); None and 0 leave the placement as it is.
 
     The robot's base is first turned so that its start shape lies on its flattest side
     (``_rest_on_flattest_side``; no turn for the planar rolling shapes).
@@ -128,6 +135,14 @@ def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05
             yaw = float(box_yaw)
             if not np.isfinite(yaw):
                 raise ValueError(f"box_yaw must be a finite angle in radians, got {box_yaw}")
+        if box_shift is not None:
+            shift = np.asarray(box_shift, dtype=float).reshape(-1)
+            if shift.shape != (2,) or not np.all(np.isfinite(shift)):
+                raise ValueError(f"box_shift must be two finite numbers (dx, dy) in metres, got {box_shift}")
+            centre = centre + shift
+        if not np.isfinite(float(box_turn)):
+            raise ValueError(f"box_turn must be a finite angle in radians, got {box_turn}")
+        yaw = yaw + float(box_turn)
         q[iq.start:iq.start + 3] = [centre[0], centre[1], box.half[2]]
         q[iq.start + 3:iq.start + 7] = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
     return q

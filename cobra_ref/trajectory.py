@@ -82,6 +82,25 @@ class Trajectory:
             "error": self.error or None,
         }
 
+    def truncated(self, duration: float) -> "Trajectory":
+        """The first ``duration`` seconds: the states up to step n = round(duration / dt), the
+        steps before it and the contact rows of those steps; the whole trajectory if it is shorter.
+
+        Helper: an ensemble's members judged over one common window. ``wall_time`` is scaled by
+        the share of steps kept; ``error`` is kept only when the failure lies within the window.
+        """
+        if not (np.isfinite(duration) and duration > 0):
+            raise ValueError(f"duration must be positive and finite, got {duration}")
+        n = int(round(duration / self.dt))
+        if n >= len(self.tau):
+            return self
+        keep = self.contacts["contact_step"] < n
+        share = n / max(len(self.tau), 1)
+        return Trajectory(self.dt, self.t[:n + 1], self.q[:n + 1], self.qd[:n + 1], self.tau[:n],
+                          self.box_pose[:n + 1], {k: v[:n] for k, v in self.steps.items()},
+                          {k: v[keep] for k, v in self.contacts.items()}, self.wall_time * share, "",
+                          dict(self.meta, truncated_to=float(n * self.dt)))
+
     @classmethod
     def from_npz(cls, path: str) -> "Trajectory":
         """Read back what ``to_npz`` wrote.

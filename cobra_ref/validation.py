@@ -291,6 +291,8 @@ RULES = {
                            why="each of the study's runs; the finest dt (0.25 ms) takes 4000 steps per second"),
     "scenario_duration": Rule("duration", "s", 0.0, 60.0, low_open=True, why="each scenario of the sweep"),
     "count": Rule("count", "-", 1, 100_000, kind="int"),
+    "members": Rule("members", "-", 1, 256, kind="int",
+                    why="ensemble members per gait (A29); member 0 is the figure run"),
     "gait_param": Rule("gait parameter", "-", why="the gait checks its own range"),
     # replaying and rendering a run (viz.render checks the same ranges for API callers)
     "speed": Rule("speed", "-", 0.0, 100.0, low_open=True, why="simulated seconds per shown second"),

@@ -32,7 +32,8 @@ def cache_dir(tmp_path_factory):
 @pytest.fixture(scope="session")
 def results(cache_dir):
     """{gait: Trajectory} of 0.5 s runs of the five paper gaits."""
-    return run_all([RunSpec(g, duration=DURATION) for g in PAPER_GAITS], cache_dir, progress=False)
+    runs = run_all([RunSpec(g, duration=DURATION) for g in PAPER_GAITS], cache_dir, progress=False)
+    return {spec.gait: traj for spec, traj in runs.items()}
 
 
 def assert_real_image(path):

@@ -308,6 +308,12 @@ REFUSED = [
     ("bench-json-directory", ["bench", "--json", "{here}/adir"], 1, "is a directory"),
     ("bench-json-empty", ["bench", "--json", ""], 1, "--json path is empty"),
     ("bench-json-proc", ["bench", "--json", "/proc/bench.json"], 1, "cannot write in output directory /proc"),
+    # --- figures (refused before any simulation)
+    ("figures-members-zero", ["figures", "--members", "0"], 2, "--members = 0 is out of range (allowed: an integer [1, 256]"),
+    ("figures-members-abc", ["figures", "--members", "abc"], 2, "--members = 'abc' is not an integer"),
+    ("figures-members-float", ["figures", "--members", "2.5"], 2, "--members = '2.5' is not an integer"),
+    ("figures-check-without-claims", ["figures", "--check", "--out", "{here}/adir"], 2,
+     "--check compares with the committed claims report, but"),
     # --- render (the shared output check)
     ("render-out-directory", ["render", "{in}/straight.npz", "--out", "{here}/adir.gif"], 1, "is a directory"),
 ]

@@ -6,8 +6,11 @@ Helper: the command-line side of :mod:`cobra_ref.reproduce.regenerate`.
 from __future__ import annotations
 
 import json
+import os
+import sys
 
 from .common import c_stdout_silenced
+from ..validation import RULES
 
 
 def cmd_figures(args) -> int:
@@ -22,6 +25,7 @@ def cmd_figures(args) -> int:
     unknown = [g for g in gaits if g not in PAPER_GAITS]
     if unknown:
         raise SystemExit(f"error: unknown gait(s) {', '.join(unknown)}; gaits: {', '.join(PAPER_GAITS)}")
+    committed = _committed_claims(args.out) if args.check else None
     try:
         check_output_dir(args.out)
     except OSError as exc:
@@ -30,10 +34,49 @@ def cmd_figures(args) -> int:
         result = regenerate(args.out, quick=args.quick, force=args.force, cache_dir=args.cache,
                             workers=args.jobs, mujoco=not args.no_mujoco, progress=not args.quiet, gaits=gaits,
                             optimized_dir=None if args.defaults else OPTIMIZED_DIR,
-                            reoptimize_all=args.reoptimize)
-    print(json.dumps({"out": args.out, "files": len(result["files"]),
-                      "claims": {c["id"]: c["holds"] for c in result["claims"]},
-                      "seconds": round(result["seconds"], 1)}))
+                            reoptimize_all=args.reoptimize, n_members=args.members)
+    summary = {"out": args.out, "files": len(result["files"]),
+               "claims": {c["id"]: c.get("verdict", c["holds"]) for c in result["claims"]},
+               "seconds": round(result["seconds"], 1)}
+    status = 0
+    if committed is not None:
+        status = check_report(committed, result["claims"])
+        summary["check"] = "agrees" if status == 0 else "mismatch"
+    print(json.dumps(summary))
+    return status
+
+
+def _committed_claims(out_dir: str) -> list:
+    """The committed claims of ``out_dir/claims.json``, read before anything is regenerated;
+    exit status 2 with a message when there is none or it is not a claims report."""
+    from ..reproduce.check import read_committed
+
+    path = os.path.join(out_dir, "claims.json")
+    if not os.path.isfile(path):
+        sys.stderr.write(f"error: --check compares with the committed claims report, but {path} does not exist; "
+                         "run 'cobra-ref figures' without --check first\n")
+        raise SystemExit(2)
+    try:
+        return read_committed(path)
+    except (OSError, ValueError) as exc:
+        sys.stderr.write(f"error: --check: {exc}\n")
+        raise SystemExit(2) from None
+
+
+def check_report(committed: list, regenerated: list) -> int:
+    """Exit status of ``--check``: 0 when the regenerated claims agree with the committed ones
+    (``reproduce.check.compare_claims``), 1 otherwise, with the table of mismatches on stderr.
+
+    Helper: the command line (cobra-ref figures --check).
+    """
+    from ..reproduce.check import compare_claims, mismatch_table
+
+    mismatches = compare_claims(committed, regenerated)
+    if mismatches:
+        sys.stderr.write(f"--check: {len(mismatches)} mismatch(es) with the committed claims.json:\n"
+                         + mismatch_table(mismatches))
+        return 1
+    sys.stderr.write("--check: the regenerated claims agree with the committed claims.json\n")
     return 0
 
 
@@ -43,7 +86,8 @@ def add_parsers(sub) -> None:
     Helper: the command line (cobra-ref figures).
     """
     p = sub.add_parser("figures", help="regenerate the paper's figures 3-9, GIFs and the claims report",
-                       description="Simulate the five gaits (10 s each; 1 s with --quick; with the optimized "
+                       description="Simulate the five gaits, each as an ensemble of --members runs (member 0: 10 s, "
+                                   "the others 2 s; 1 s each with --quick; with the optimized "
                                    "parameters of cobra_ref/optimized/ where present) on all cores, or read "
                                    "them from the cache, and write fig03_snapshots.png ... fig09_box_distance.png "
                                    "(+ PDF), anim_<gait>.gif, claims.json, claims.md and summary.json to --out. "
@@ -61,5 +105,12 @@ def add_parsers(sub) -> None:
     p.add_argument("--reoptimize", action="store_true",
                    help="first re-run 'cobra-ref optimize' for every gait and the three direction goals, into "
                         "OUT/optimized/, and use those")
+    p.add_argument("--members", type=RULES["members"].arg("--members"), default=8,
+                   help="ensemble members per gait: member 0 is the figure run, the others are perturbed "
+                        "starts, phases and frictions judged over the first 6 s (default 8)")
+    p.add_argument("--check", action="store_true",
+                   help="compare the regenerated claims with OUT/claims.json as it was before the run: "
+                        "exit 1 with a table of mismatches when a verdict differs or a statistic leaves the "
+                        "committed ensemble's spread, 2 when there is no claims.json")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_figures)

@@ -7,17 +7,30 @@ Steps:
 
 0. with ``reoptimize_all``, re-run the single-shooting optimizer for every gait and for the
    direction goals (``DIRECTIONS``) into ``OUT/optimized/``;
-1. simulate the five gaits (C, S, J, J-mirror, sidewinding; 10 s each, 1 s with ``quick``) on
-   both cores, or read them from the cache (``reproduce``: keyed by a hash of every input). A gait
-   with a params JSON in the optimized directory (``cobra_ref/optimized/<gait>.json`` by
-   default, committed) runs with its optimized parameters, the others with their defaults;
-2. write each figure; a figure whose inputs (the simulations' cache keys and the figure
-   module's source) are unchanged since it was last written is kept (``.stamps.json`` in the
-   output directory), unless ``force``;
+1. simulate the five gaits (C, S, J, J-mirror, sidewinding), each as an ensemble of N members
+   (``MEMBERS`` = 8 by default; ``ensemble.members``, assumption A29): member 0 is the figure run
+   (10 s, 1 s with ``quick``), members 1 .. N-1 run ``ENSEMBLE_DURATION`` = 6 s (1 s with
+   ``quick``), on both cores (or any executor), or read from the cache (``reproduce``: keyed by
+   a hash of every input). A gait with a params JSON in the optimized directory
+   (``cobra_ref/optimized/<gait>.json`` by default) runs with its optimized parameters, the
+   others with their defaults;
+2. write each figure from the member-0 runs, figs. 6 and 9 with the members' spread; a figure
+   whose inputs (the simulations' cache keys and the figure package's source) are unchanged
+   since it was last written is kept (``.stamps.json`` in the output directory), unless ``force``;
    ``fig_optimization`` and ``fig_directions`` come from the params JSONs (each optimum
    replayed once, its box path cached);
-3. write ``claims.json`` (a list of {id, claim, values, holds}) and ``claims.md``, and
-   ``summary.json`` with every gait's numbers.
+3. judge the claims on the ensembles: every member over the same window, its first
+   ``ENSEMBLE_DURATION`` seconds (member 0 truncated to it), and write ``claims.json`` (a list
+   of claim entries, each with its ``statistics`` over the members, ``check``), ``claims.md``
+   and ``summary.json`` with every gait's numbers and every member's; then the MuJoCo
+   comparison on the first K = min(N, ``MUJOCO_MEMBERS`` = 4) members of each gait, cached.
+
+Why ENSEMBLE_DURATION = 6 s: the claims judge steady gaits, so the window holds the default
+gaits' 2 s phase-rate ramp and two 0.5 Hz periods after it (the steady-power and phase claims
+need those two periods; sidewinding meets its box at about 1.5 s and pushes for the rest). A
+clean run then simulates 5 x 10 s figure runs and 35 x 6 s members, 260 simulated seconds. Why K = 4: MuJoCo's box rollouts run at 0.1 ms steps
+(about 2 wall seconds per simulated second); 4 members per gait keep the comparison under a
+minute on two cores and still give a spread (min-max of 4) to compare against.
 
 Every file is written atomically (temporary file + rename): an interrupted run leaves the
 previous outputs or none, never half a file.
@@ -38,6 +51,12 @@ from ..output import atomic_write, write_text
 from .runs import PAPER_GAITS, RunSpec, run_all
 
 FULL_DURATION, QUICK_DURATION = 10.0, 1.0
+MEMBERS = 8  # members per gait (member 0: the figure run)
+# [s] the other members' runs and the window every member is judged on: the default gaits' 2 s
+# phase-rate ramp and two 0.5 Hz periods after it (the steady-power and phase claims need two
+# periods after the ramp; sidewinding meets its box at about 1.5 s); the budget's lever
+ENSEMBLE_DURATION = 6.0
+MUJOCO_MEMBERS = 4  # members per gait in the MuJoCo box comparison: K = min(N, 4)
 
 
 def check_output_dir(out_dir: str) -> None:
@@ -45,22 +64,87 @@ def check_output_dir(out_dir: str) -> None:
 
     Helper: checked before any simulation starts, so a bad directory costs nothing.
     """
+    from ..output import check_output
+
     try:
         os.makedirs(out_dir, exist_ok=True)
     except OSError as exc:
         raise OSError(f"cannot create output directory {out_dir}: {exc.strerror}") from exc
-    if not os.access(out_dir, os.W_OK):
-        raise OSError(f"output directory is not writable: {out_dir}")
+    # a real probe (a temporary file created and removed): os.access answers yes to root everywhere
+    check_output(os.path.join(out_dir, "claims.json"), "the figures")
 
 
 def specs_for(gaits=PAPER_GAITS, quick: bool = False, dt: float = 1e-3, params: dict | None = None) -> list[RunSpec]:
-    """The run of each gait: 10 s (1 s with ``quick``) at dt, with ``params[gait]`` if given.
+    """The figure run of each gait: 10 s (1 s with ``quick``) at dt, with ``params[gait]`` if given.
 
-    Helper: the figure command's simulations.
+    Helper: the figure command's simulations (member 0 of each ensemble).
     """
     duration = QUICK_DURATION if quick else FULL_DURATION
     params = params or {}
     return [RunSpec(g, duration=duration, dt=dt, params=dict(params.get(g, {}))) for g in gaits]
+
+
+def ensemble_specs(gaits=PAPER_GAITS, n_members: int = MEMBERS, quick: bool = False, dt: float = 1e-3,
+                   params: dict | None = None) -> dict:
+    """{gait: [RunSpec per member]}: member 0 is the figure run (``specs_for``), members 1 .. n-1
+    are ``ensemble.members(gait, n)``, each ``ENSEMBLE_DURATION`` seconds (1 s with ``quick``).
+
+    Helper: the ensembles of the figure command (module docstring, step 1).
+    """
+    from .ensemble import members
+
+    duration = QUICK_DURATION if quick else ENSEMBLE_DURATION
+    params = params or {}
+    out = {}
+    for nominal in specs_for(gaits, quick, dt, params):
+        out[nominal.gait] = [nominal] + [RunSpec(nominal.gait, duration=duration, dt=dt, params=dict(nominal.params),
+                                                 member=m) for m in members(nominal.gait, n_members)[1:]]
+    return out
+
+
+def window(quick: bool) -> float:
+    """Helper: the seconds over which every member is judged (``ENSEMBLE_DURATION``; 1 s with ``quick``)."""
+    return QUICK_DURATION if quick else ENSEMBLE_DURATION
+
+
+def ensemble_summaries(specs: dict, results: dict, duration: float, goals: dict | None = None) -> dict:
+    """{gait: [summary per member]}: ``claims.gait_summaries`` of each member's first ``duration``
+    seconds (``Trajectory.truncated``), with the member's perturbation (``member``, None for
+    member 0) and, for a gait optimized towards a goal, ``goal_direction`` (unit (x, y), world axes).
+
+    Helper: the numbers behind the ensemble claims and the spreads of figs. 6 and 9.
+    """
+    from .claims import gait_summaries
+
+    goals = goals or {}
+    out = {}
+    for g, runs in specs.items():
+        out[g] = []
+        for spec in runs:
+            summary = gait_summaries({g: results[spec].truncated(duration)})[g]
+            summary["member"] = None if spec.member is None else spec.member.as_dict()
+            if g in goals:
+                summary["goal_direction"] = list(goals[g])
+            out[g].append(summary)
+    return out
+
+
+def goal_directions(files: dict) -> dict:
+    """{gait: unit (x, y)} of the goal of each params JSON in ``files`` ({gait: path}) that has one.
+
+    Helper: ``goal_direction`` of the ensemble summaries (the goal is relative to the box's
+    start, world axes: ``settings.goal`` of the params JSON).
+    """
+    out = {}
+    for g, path in files.items():
+        try:
+            with open(path, encoding="utf-8") as f:
+                goal = np.asarray(json.load(f)["settings"]["goal"], dtype=float)[:2]
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+        if goal.shape == (2,) and np.all(np.isfinite(goal)) and np.linalg.norm(goal) > 0:
+            out[g] = [float(x) for x in goal / np.linalg.norm(goal)]
+    return out
 
 
 OPTIMIZED_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "optimized")  # cobra_ref/optimized
@@ -114,16 +198,19 @@ def reoptimize(directory: str, gaits=PAPER_GAITS, progress: bool = True) -> dict
 def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = False, cache_dir: str | None = None,
                workers: int | None = None, mujoco: bool = True, progress: bool = True, gaits=PAPER_GAITS,
                params: dict | None = None, optimized_dir: str | None = OPTIMIZED_DIR,
-               reoptimize_all: bool = False) -> dict:
+               reoptimize_all: bool = False, n_members: int = MEMBERS, executor=None) -> dict:
     """Run steps 1-3 of the module docstring; return {"files": [...], "claims": [...], "seconds": ...}.
 
-    Helper: the body of ``cobra-ref figures``.
+    Helper: the body of ``cobra-ref figures``. ``n_members`` (N >= 1) members per gait;
+    ``executor``: where the runs go (``runs.run_all``; default a process pool on the cores).
     """
     from . import claims as claims_mod
     from .figures import FIGURES
     from ..robots import cobra_model
 
     start = time.perf_counter()
+    if isinstance(n_members, bool) or not isinstance(n_members, (int, np.integer)) or n_members < 1:
+        raise ValueError(f"members per gait must be a whole number >= 1, got {n_members!r}")
     check_output_dir(out_dir)
     cache_dir = cache_dir or os.path.join(out_dir, ".cache")
     if reoptimize_all:
@@ -137,11 +224,17 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
                            f"defaults (assumption A10) for any other gait")
         else:
             _say(progress, "default gait parameters (assumption A10) for every gait")
-    specs = specs_for(gaits, quick, params=params)
-    _say(progress, f"simulating {len(specs)} gaits x {specs[0].duration:g} s (cache: {cache_dir})")
-    results = run_all(specs, cache_dir, force=force, workers=workers, progress=progress)
+    specs = ensemble_specs(gaits, n_members, quick, params=params)
+    every = [spec for runs in specs.values() for spec in runs]
+    T = window(quick)
+    _say(progress, f"simulating {len(specs)} gaits x {n_members} member(s): member 0 {every[0].duration:g} s, "
+                   f"the others {T:g} s (cache: {cache_dir})")
+    runs = run_all(every, cache_dir, force=force, workers=workers, progress=progress, executor=executor)
+    results = {g: runs[members[0]] for g, members in specs.items()}
+    ensemble = ensemble_summaries(specs, runs, T, goal_directions(files_opt))
     model = cobra_model(with_box=True)
-    keys = {s.gait: s.key() for s in specs}
+    keys = {spec.label(): spec.key() for spec in every}
+    keys["ensemble window (s)"] = T
     stamps_path = os.path.join(out_dir, ".stamps.json")
     stamps = _read_json(stamps_path) if not force else {}
     files = []
@@ -154,7 +247,7 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
             _say(progress, f"  {name}: unchanged, kept")
             continue
         t0 = time.perf_counter()
-        written = module.make(results, out_dir, model)
+        written = module.make(results, out_dir, model, ensemble=ensemble)
         stamps[name] = {"stamp": stamp, "files": written}
         write_text(stamps_path, json.dumps(stamps, indent=1))
         files += written
@@ -162,8 +255,10 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
     if optimized_dir and os.path.isdir(optimized_dir):
         files += _optimization_figures(optimized_dir, gaits, out_dir, cache_dir, progress)
     summaries = claims_mod.gait_summaries(results)
-    report = claims_mod.paper_claims(summaries)
-    settings = {"duration (s)": specs[0].duration, "dt (s)": specs[0].dt, "quick": quick,
+    report = ensemble_report(ensemble)
+    settings = {"duration (s)": every[0].duration, "dt (s)": every[0].dt, "quick": quick,
+                "ensemble": {"members per gait": n_members, "window (s)": T,
+                             "rule": "cobra_ref/reproduce/ensemble.py (assumption A29)"},
                 "optimized parameters from": {g: _shown(files_opt[g]) if g in files_opt else "defaults (assumption A10)"
                                               for g in gaits}
                 if params else "defaults (assumption A10)",
@@ -171,49 +266,128 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
                 "box direction (sidewinding)": results["sidewinding"].meta.get("box_direction")
                 if "sidewinding" in results else None}
     if mujoco:
-        report += _mujoco_rows(results, out_dir, progress, files)
+        report += _mujoco_rows(specs, runs, T, out_dir, cache_dir, progress, files, force)
     paths = {"claims.json": json.dumps(_clean(report), indent=1),
              "claims.md": claims_mod.to_markdown(report, summaries, settings),
-             "summary.json": json.dumps(_clean({"gaits": summaries, "settings": settings}), indent=1)}
+             "summary.json": json.dumps(_clean({"gaits": summaries, "ensemble": ensemble, "settings": settings}),
+                                        indent=1)}
     for fname, text in paths.items():
         write_text(os.path.join(out_dir, fname), text)
         files.append(os.path.join(out_dir, fname))
-    return {"files": files, "claims": report, "seconds": time.perf_counter() - start}
+    return {"files": files, "claims": _clean(report), "seconds": time.perf_counter() - start}
 
 
-def _mujoco_rows(results, out_dir, progress, files) -> list[dict]:
+def ensemble_report(ensemble: dict) -> list[dict]:
+    """The paper's claims judged on the ensembles, each entry with its ``statistics`` over the
+    members (``check.claim_statistics``).
+
+    Helper: ``claims.ensemble_claims`` when the claims module has it; otherwise
+    ``claims.paper_claims`` of the member-0 summaries (over the same window).
+    """
+    from . import claims as claims_mod
+    from .check import claim_statistics
+
+    judge = getattr(claims_mod, "ensemble_claims", None)
+    report = judge(ensemble) if judge else claims_mod.paper_claims({g: m[0] for g, m in ensemble.items()})
+    stats = claim_statistics(ensemble, claims_mod.paper_claims)
+    for entry in report:
+        if entry["id"] in stats:
+            entry["statistics"] = stats[entry["id"]]
+    return report
+
+
+def _mujoco_rows(specs, runs, window_s, out_dir, cache_dir, progress, files, force: bool = False) -> list[dict]:
     """The MuJoCo comparison as claims, and its figure; empty, with a note on stderr, when mujoco
     is not installed (it is an optional extra).
 
     Helper: (a) the robot alone, each gait, ``mujoco_check.TRAVEL_DURATION`` seconds in both
-    simulators; (b) the box displacement after ``BOX_DURATION`` seconds from each figure run's own
-    start (one member per gait until the figure runs become ensembles), ours read off the run.
+    simulators; (b) per gait the first K = min(N, ``MUJOCO_MEMBERS``) members, each from its own
+    settled start (q0, qd0) with its own friction scale, the box displacement after
+    ``BOX_DURATION`` seconds (or the ensemble window if shorter), ours read off the member's run.
+    Every row is cached in ``cache_dir`` under a hash of its inputs (``_mujoco_key``); the figure
+    is kept when its rows came from the cache and it was drawn from them (``.stamps.json``);
+    ``force`` computes and draws everything again.
     """
-    from .mujoco_check import box_ensemble_rows, claims, mujoco_available, robot_travel_rows
+    from .mujoco_check import claims, mujoco_available
 
     if not mujoco_available():
         _say(progress, "  MuJoCo comparison skipped: mujoco is not installed (pip install mujoco)")
         return []
-    done = {g: r for g, r in results.items() if not r.error}
+    done = {g: members for g, members in specs.items() if not runs[members[0]].error}
     if not done:
         return []
-    from ..gaits import gait
-
     t0 = time.perf_counter()
-    params = {g: r.meta.get("gait_params", {}) for g, r in done.items()}
-    rows = robot_travel_rows(list(done), params=params)
-    members = {}
-    for g, r in done.items():
-        n = min(int(round(BOX_DURATION / r.dt)), len(r.box_pose) - 1)
-        members[g] = [{"reference": gait(g, **params[g]), "q0": r.q[0], "qd0": r.qd[0], "mu_scale": 1.0,
-                       "ours": r.box_pose[n, :2] - r.box_pose[0, :2]}]
-    duration = min(BOX_DURATION, min(r.duration for r in done.values()))
-    rows += box_ensemble_rows(members, duration)
-    from .figures.fig_mujoco_check import make as make_figure
+    duration = min(BOX_DURATION, window_s, min(runs[m[0]].duration for m in done.values()))
+    k = min(len(next(iter(done.values()))), MUJOCO_MEMBERS)
+    boxed = {g: [m for m in members[:k] if not runs[m].error] for g, members in done.items()}
+    key = _mujoco_key(boxed, runs, duration)
+    cached = os.path.join(cache_dir, f"mujoco-{key[:16]}.json")
+    rows = _read_json(cached).get("rows") if os.path.isfile(cached) and not force else None
+    if rows is None:
+        rows = _mujoco_compute(boxed, runs, duration)
+        os.makedirs(cache_dir, exist_ok=True)
+        write_text(cached, json.dumps({"key": key, "rows": _clean(rows)}))
+        what = "computed"
+    else:
+        what = "from the cache"
+    from .figures import fig_mujoco_check
 
-    files += make_figure(rows, out_dir)
-    _say(progress, f"  MuJoCo comparison: {len(done)} gaits, {time.perf_counter() - t0:.1f} s")
+    stamps_path = os.path.join(out_dir, ".stamps.json")
+    stamps, stamp = _read_json(stamps_path), _stamp({"mujoco": key}, fig_mujoco_check)
+    old = stamps.get("fig_mujoco_check", {})
+    if what == "from the cache" and old.get("stamp") == stamp and all(os.path.isfile(f) for f in old.get("files", [])):
+        files += old["files"]
+    else:
+        written = fig_mujoco_check.make(rows, out_dir)
+        stamps["fig_mujoco_check"] = {"stamp": stamp, "files": written}
+        write_text(stamps_path, json.dumps(stamps, indent=1))
+        files += written
+    _say(progress, f"  MuJoCo comparison: {len(done)} gaits x {k} member(s), {what}, {time.perf_counter() - t0:.1f} s")
     return claims(rows)
+
+
+def _mujoco_key(boxed: dict, runs: dict, duration: float) -> str:
+    """SHA-256 of every input of the MuJoCo rows: the runs' cache keys (their starts, gaits and
+    physics), the duration, the source of ``mujoco_check`` and ``mjcf`` and mujoco's version."""
+    import mujoco
+
+    from . import mujoco_check
+    from .. import mjcf
+    from .runs import physics_hash
+
+    h = hashlib.sha256(json.dumps({"runs": {g: [s.key() for s in members] for g, members in boxed.items()},
+                                   "duration": duration, "mujoco": mujoco.__version__,
+                                   "members": MUJOCO_MEMBERS}, sort_keys=True).encode())
+    for module in (mujoco_check, mjcf):
+        with open(module.__file__, "rb") as f:
+            h.update(f.read())
+    h.update(physics_hash().encode())
+    return h.hexdigest()
+
+
+def _mujoco_compute(boxed: dict, runs: dict, duration: float) -> list[dict]:
+    """The travel rows and the box-ensemble rows (each gait's MuJoCo rollouts in a worker process)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from ..executors import worker_init
+    from .mujoco_check import box_ensemble_rows, robot_travel_rows
+
+    params = {g: runs[members[0]].meta.get("gait_params", {}) for g, members in boxed.items()}
+    with ProcessPoolExecutor(min(len(boxed), os.cpu_count() or 1), initializer=worker_init) as pool:
+        ensembles = {}
+        for g, members in boxed.items():
+            ensembles[g] = []
+            for spec in members:
+                r = runs[spec]
+                n = min(int(round(duration / r.dt)), len(r.box_pose) - 1)
+                ensembles[g].append({"reference": spec.reference(), "q0": r.q[0], "qd0": r.qd[0],
+                                     "mu_scale": 1.0 if spec.member is None else spec.member.mu_scale,
+                                     "ours": r.box_pose[n, :2] - r.box_pose[0, :2]})
+        boxes = [pool.submit(box_ensemble_rows, {g: e}, duration) for g, e in ensembles.items()]
+        rows = robot_travel_rows(list(boxed), params=params, executor=pool)
+        for f in boxes:
+            rows += f.result()
+    return rows
 
 
 BOX_DURATION = 3.0  # [s] the box comparison with MuJoCo (0.1 ms steps there: 30 000 per member)

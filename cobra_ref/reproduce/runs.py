@@ -1,14 +1,18 @@
-"""Run the paper's gaits for the figures: one simulation per gait, cached, both cores in use.
+"""Run the paper's gaits for the figures: one simulation per gait and ensemble member, cached, on any executor.
 
 Helper: the simulation half of ``cobra-ref figures`` ([COBRA] sec. "Results", figs. 3-9).
 
-Each gait run is a ``RunSpec``: the gait's name and parameters, the duration, dt and the robot-box
-friction. Its result is the ``Trajectory`` NPZ of ``cobra-ref simulate``, stored in the cache
-directory under ``<gait>-<key>.npz``, where key = SHA-256 of every input: the spec, the model
-parameters (``CobraParameters``), the stepper settings and the source code of every module the
-simulation runs (so editing the physics invalidates the cache, editing a figure does not).
-A run that fails mid-way is stored as ``<gait>-<key>.failed.npz`` with what it computed and its
-error, and the figures use that partial trajectory (the claims report says so).
+Each run is a ``RunSpec``: the gait's name and parameters, the duration, dt, the robot-box
+friction and the ensemble member (``ensemble.Member``: box shift and turn, phase shift, friction
+scale; None for the nominal run). Its result is the ``Trajectory`` NPZ of ``cobra-ref simulate``,
+stored in the cache directory under ``<gait>[-m<i>]-<key>.npz``, where key = SHA-256 of every
+input: the spec, the model parameters (``CobraParameters``), the stepper settings and the
+source code of every module the simulation runs (so editing the physics invalidates the cache,
+editing a figure does not). A nominal member adds nothing to the key: member 0 is the nominal run.
+A run that fails mid-way is stored as ``<name>.failed.npz`` with what it computed and its error,
+and the figures use that partial trajectory (the claims report says so). ``run_all`` sends the
+runs to any ``concurrent.futures.Executor`` and reads every result back from the cache, so the
+numbers do not depend on where the runs ran.
 
 Box placement per gait (assumption C9, extended):
 
@@ -19,6 +23,10 @@ Box placement per gait (assumption C9, extended):
   the direction the gait *travels*, 5 cm beyond the band its wave sweeps
   (``placement.travel_placement``, assumption A31; computed with the run, its direction and
   clearance reported in the trajectory's ``meta``).
+
+An ensemble member's box is placed by the same rule (for sidewinding, from a box-free run of the
+member's own gait, its phase shifted and its frictions scaled), then shifted by ``box_shift`` and
+turned by ``box_turn`` (``start.placed_state``); its frictions are scaled by ``mu_scale``.
 """
 
 from __future__ import annotations
@@ -28,7 +36,7 @@ import json
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
@@ -44,6 +52,7 @@ from ..simulate import simulate
 from ..start import initial_state
 from ..step import SimulationError, StepSettings
 from ..trajectory import Trajectory
+from .ensemble import Member
 
 PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
 
@@ -51,33 +60,51 @@ PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
 
 @dataclass(frozen=True)
 class RunSpec:
-    """One gait run: the gait, its parameters (empty = the defaults of assumption A10), and the settings."""
+    """One gait run: the gait, its parameters (empty = the defaults of assumption A10), the settings,
+    and the ensemble member (None: the nominal run, ``ensemble.Member``)."""
 
     gait: str
     duration: float = 10.0
     dt: float = 1e-3
     params: dict = field(default_factory=dict, hash=False)
     mu_robot_box: float | None = None
+    member: Member | None = None
 
     def reference(self):
-        return gait(self.gait, **self.params)
+        """The gait with ``params``, its ``phase`` shifted by the member's."""
+        ref = gait(self.gait, **self.params)
+        if self.member is not None and self.member.phase:
+            ref = replace(ref, phase=ref.phase + self.member.phase)
+        return ref
 
     def cobra_parameters(self) -> CobraParameters:
+        """The model parameters: ``mu_robot_box`` if given, every friction coefficient times the member's ``mu_scale``."""
         p = CobraParameters()
-        return p if self.mu_robot_box is None else replace(p, mu_robot_box=self.mu_robot_box)
+        p = p if self.mu_robot_box is None else replace(p, mu_robot_box=self.mu_robot_box)
+        if self.member is not None and self.member.mu_scale != 1.0:
+            p = replace(p, mu=p.mu * self.member.mu_scale, mu_robot_box=p.mu_robot_box * self.member.mu_scale)
+        return p
 
     def key(self) -> str:
-        """SHA-256 of every input of the run (module docstring)."""
+        """SHA-256 of every input of the run (module docstring); a nominal member adds nothing to it."""
         h = hashlib.sha256()
-        record = {"spec": asdict(self), "gait": gait_params(self.reference()),
+        spec = asdict(self)
+        if self.member is None or self.member.nominal:
+            del spec["member"]
+        record = {"spec": spec, "gait": gait_params(self.reference()),
                   "cobra": asdict(self.cobra_parameters()), "settings": asdict(StepSettings(dt=self.dt)),
                   "version": __version__}
         h.update(json.dumps(record, sort_keys=True, default=str).encode())
         h.update(physics_hash().encode())
         return h.hexdigest()
 
+    def label(self) -> str:
+        """The run's name in progress lines and file names: the gait, and ``#i`` for member i."""
+        return self.gait if self.member is None else f"{self.gait}#{self.member.index}"
+
     def filename(self) -> str:
-        return f"{self.gait}-{self.key()[:16]}.npz"
+        stem = self.gait if self.member is None else f"{self.gait}-m{self.member.index}"
+        return f"{stem}-{self.key()[:16]}.npz"
 
 
 def physics_hash(extra=()) -> str:
@@ -103,90 +130,161 @@ def run(spec: RunSpec, cache_dir: str, force: bool = False, progress=None) -> tu
 
     Helper: one gait run of the figure command (module docstring: cache key, box placement).
     """
-    path = os.path.join(cache_dir, spec.filename())
-    failed = path[:-4] + ".failed.npz"
     if not force:
-        for p in (path, failed):
-            if os.path.isfile(p):
-                return Trajectory.from_npz(p), True
-    model = cobra_model(spec.cobra_parameters(), with_box=True)
-    ref = spec.reference()
-    placement = (travel_placement(cobra_model(spec.cobra_parameters(), with_box=False), ref, spec.dt)
-                 if spec.gait == "sidewinding" else None)
-    direction = None if placement is None else placement.direction
-    q0, qd0 = initial_state(model, ref, box_direction=direction,
-                            box_gap=0.05 if placement is None else placement.box_gap)
-    try:
-        traj = simulate(model, ref, spec.duration, StepSettings(dt=spec.dt), q0, qd0, progress=progress)
-        out = path
-    except SimulationError as exc:
-        if exc.trajectory is None:
-            raise
-        traj, out = exc.trajectory, failed
-    traj.meta.update({"gait": spec.gait, "gait_params": gait_params(ref), "cache_key": spec.key(),
-                      "box_direction": None if direction is None else [float(x) for x in direction],
-                      "box_gap": None if placement is None else placement.box_gap})
-    os.makedirs(cache_dir, exist_ok=True)
-    traj.to_npz(out)
+        cached = cached_path(spec, cache_dir)
+        if cached:
+            return Trajectory.from_npz(cached), True
+    traj, failed = simulate_spec(spec, progress)
+    store(spec, cache_dir, traj, failed)
     return traj, False
 
 
-def _run_in_worker(spec: RunSpec, cache_dir: str, force: bool, queue):
-    """Process-pool entry: run one spec, reporting (gait, done, total) to ``queue``."""
-    report = None if queue is None else (lambda done, total: queue.put((spec.gait, done, total)))
-    traj, cached = run(spec, cache_dir, force, report)
-    return spec.gait, cached
+def simulate_spec(spec: RunSpec, progress=None) -> tuple[Trajectory, bool]:
+    """Simulate ``spec`` from its placed and settled start, its member's perturbation applied;
+    return (trajectory, failed): a run that fails mid-way returns what it computed, its error set.
+
+    Helper: the simulation of ``run``, alone so that any executor can run it (nothing is written).
+    """
+    model = cobra_model(spec.cobra_parameters(), with_box=True)
+    ref = spec.reference()
+    placement = (travel_placement(cobra_model(spec.cobra_parameters(), with_box=False), ref, spec.dt)
+                  if spec.gait == "sidewinding" else None)
+    direction = None if placement is None else placement.direction
+    member = spec.member
+    q0, qd0 = initial_state(model, ref, box_direction=direction,
+                            box_gap=0.05 if placement is None else placement.box_gap,
+                            box_shift=None if member is None else member.box_shift,
+                            box_turn=0.0 if member is None else member.box_turn)
+    try:
+        traj, failed = simulate(model, ref, spec.duration, StepSettings(dt=spec.dt), q0, qd0, progress=progress), False
+    except SimulationError as exc:
+        if exc.trajectory is None:
+            raise
+        traj, failed = exc.trajectory, True
+    traj.meta.update({"gait": spec.gait, "gait_params": gait_params(ref), "cache_key": spec.key(),
+                      "box_direction": None if direction is None else [float(x) for x in direction],
+                      "box_gap": None if placement is None else placement.box_gap,
+                      "member": None if member is None else member.as_dict()})
+    return traj, failed
+
+
+def store(spec: RunSpec, cache_dir: str, traj: Trajectory, failed: bool) -> str:
+    """Write ``traj`` to the cache (``<name>.npz``, or ``<name>.failed.npz`` for a failed run); return the path.
+
+    Helper: the cache of ``run`` and ``run_all``.
+    """
+    path = os.path.join(cache_dir, spec.filename())
+    out = path[:-4] + ".failed.npz" if failed else path
+    os.makedirs(cache_dir, exist_ok=True)
+    traj.to_npz(out)
+    return out
+
+
+def cached_path(spec: RunSpec, cache_dir: str) -> str | None:
+    """The cache file of ``spec`` (complete or failed run), or None.
+
+    Helper: the cache of ``run`` and ``run_all``.
+    """
+    path = os.path.join(cache_dir, spec.filename())
+    for p in (path, path[:-4] + ".failed.npz"):
+        if os.path.isfile(p):
+            return p
+    return None
+
+
+def _run_in_worker(spec: RunSpec, queue=None):
+    """Executor entry: simulate one spec, reporting (label, done, total) to ``queue`` if given."""
+    report = None if queue is None else (lambda done, total: queue.put((spec.label(), done, total)))
+    return simulate_spec(spec, report)
 
 
 def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = None,
-            progress: bool = True) -> dict:
-    """Run every spec (in parallel on ``workers`` processes, default: the machine's cores) and
-    return {gait: Trajectory}. Progress on stderr: each gait's percentage and the time left.
+            progress: bool = True, executor=None) -> dict:
+    """Run every spec not in the cache and return {spec: Trajectory}, every trajectory read back
+    from the cache (so the results do not depend on where the runs ran).
 
-    Helper: the figure command's simulations; a worker's exception is raised here.
+    Helper: the figure command's simulations. ``executor``: any ``concurrent.futures.Executor``
+    (a process pool, ``executors.SerialExecutor``, a Dask client's ``get_executor()``); the
+    runs are simulated there and written to ``cache_dir`` here. Default: a process pool with
+    ``executors.worker_init`` on ``workers`` processes (default: the machine's cores), or this
+    process for a single run or a single worker. Progress on stderr: the runs done of the total
+    and the time left, as each run completes; with the default pool also each running run's
+    percentage. A run's exception is raised here.
     """
     specs = list(specs)
-    workers = workers or min(len(specs), os.cpu_count() or 1)
-    todo = [s for s in specs if force or not _cached(s, cache_dir)]
-    if todo and workers > 1 and len(todo) > 1:
-        import multiprocessing
+    todo = list(dict.fromkeys(s for s in specs if force or not cached_path(s, cache_dir)))
+    todo.sort(key=lambda s: -s.duration)  # the longest runs first: no core waits alone for one at the end
+    if todo:
+        workers = workers or min(len(todo), os.cpu_count() or 1)
+        if executor is not None:
+            _run_on(executor, todo, cache_dir, progress, None)
+        elif workers > 1 and len(todo) > 1:
+            import multiprocessing
 
-        with multiprocessing.Manager() as manager:
-            queue = manager.Queue()
-            with ProcessPoolExecutor(workers, initializer=worker_init) as pool:
-                futures = [pool.submit(_run_in_worker, s, cache_dir, force, queue) for s in todo]
-                _watch(futures, queue, todo, progress)
-                for f in futures:
-                    f.result()  # re-raises a worker's exception here
-        done = {}
-    else:
-        done = {s.gait: run(s, cache_dir, force, progress_printer(f"  {s.gait}") if progress else None)[0]
-                for s in todo}
-    return {s.gait: done[s.gait] if s.gait in done else run(s, cache_dir)[0] for s in specs}
-
-
-def _cached(spec: RunSpec, cache_dir: str) -> bool:
-    path = os.path.join(cache_dir, spec.filename())
-    return os.path.isfile(path) or os.path.isfile(path[:-4] + ".failed.npz")
+            with multiprocessing.Manager() as manager:
+                queue = manager.Queue()
+                with ProcessPoolExecutor(min(workers, len(todo)), initializer=worker_init) as pool:
+                    _run_on(pool, todo, cache_dir, progress, queue)
+        else:
+            for i, s in enumerate(todo):
+                label = f"  run {i + 1}/{len(todo)} {s.label()}"
+                store(s, cache_dir, *simulate_spec(s, progress_printer(label) if progress else None))
+    return {s: run(s, cache_dir)[0] for s in specs}
 
 
-def _watch(futures, queue, specs, progress: bool) -> None:
-    """Print the status of all running gaits until every future is done: one line rewritten in
-    place on a terminal, a new line every 10 s otherwise (logs, CI)."""
-    start, state = time.perf_counter(), {s.gait: (0, 1) for s in specs}
-    tty, last = sys.stderr.isatty(), 0.0
-    while not all(f.done() for f in futures):
-        time.sleep(0.5)
-        while not queue.empty():
-            name, done, total = queue.get()
-            state[name] = (done, total)
-        elapsed = time.perf_counter() - start
-        if progress and (tty or elapsed - last >= 10.0):
-            last = elapsed
-            frac = sum(d / t for d, t in state.values()) / len(state)
-            left = f"~{elapsed / frac * (1 - frac):4.0f} s left" if frac > 0 else "estimating time left"
-            parts = "  ".join(f"{k} {100 * d / t:3.0f}%" for k, (d, t) in state.items())
-            sys.stderr.write(("\r" if tty else "") + f"  simulating: {parts}  {left} " + ("" if tty else "\n"))
+def _run_on(executor, todo, cache_dir: str, progress: bool, queue) -> None:
+    """Submit every spec of ``todo`` to ``executor``, store each result as it completes, report progress."""
+    futures = {executor.submit(_run_in_worker, s, queue): s for s in todo}
+    watcher = _Progress(todo, progress, queue)
+    pending = set(futures)
+    try:
+        while pending:
+            done, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
+            for f in done:
+                spec = futures[f]
+                store(spec, cache_dir, *f.result())  # re-raises a run's exception here
+                watcher.completed(spec)
+            watcher.poll()
+    except BaseException:
+        for f in pending:
+            f.cancel()
+        raise
+
+
+class _Progress:
+    """Progress of a batch of runs on stderr: a line per completed run (runs done / total, time
+    left from the mean time per run so far); with a queue of (label, done, total) step counts,
+    the running runs' percentages too, rewritten in place on a terminal, every 10 s otherwise."""
+
+    def __init__(self, specs, progress: bool, queue):
+        self.total, self.done, self.progress, self.queue = len(specs), 0, progress, queue
+        self.start, self.last, self.tty = time.perf_counter(), 0.0, sys.stderr.isatty()
+        self.state = {}  # label: (steps done, steps total) of the running runs
+
+    def _write(self, text: str, newline: bool) -> None:
+        if self.progress:
+            sys.stderr.write(("\r" if self.tty else "") + text + (" " if self.tty and not newline else "\n"))
             sys.stderr.flush()
-    if progress and tty:
-        sys.stderr.write("\n")
+
+    def completed(self, spec) -> None:
+        self.done += 1
+        self.state.pop(spec.label(), None)
+        elapsed = time.perf_counter() - self.start
+        left = elapsed / self.done * (self.total - self.done)
+        self._write(f"  runs done: {self.done}/{self.total} ({spec.label()}), {elapsed:.0f} s so far, "
+                    f"~{left:.0f} s left", True)
+
+    def poll(self) -> None:
+        if self.queue is None:
+            return
+        while not self.queue.empty():
+            label, done, total = self.queue.get()
+            if done < total:
+                self.state[label] = (done, total)
+            else:
+                self.state.pop(label, None)
+        elapsed = time.perf_counter() - self.start
+        if self.state and (self.tty or elapsed - self.last >= 10.0):
+            self.last = elapsed
+            parts = "  ".join(f"{k} {100 * d / t:3.0f}%" for k, (d, t) in self.state.items())
+            self._write(f"  running: {parts}  ({self.done}/{self.total} runs done)", not self.tty)

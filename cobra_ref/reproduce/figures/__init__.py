@@ -21,7 +21,7 @@ def make_all(results: dict, out_dir: str, model, animations: bool = True, ensemb
     """Run every module's ``make`` in ``FIGURES`` order (without the GIFs if ``animations`` is
     False), each with ``ensemble``, and return all paths written.
 
-    Helper: ``results`` = {gait: Trajectory} (e.g. from ``reproduce.run_all``); gaits missing from
+    Helper: ``results`` = {gait: Trajectory} (e.g. from ``reproduce.run_all``, by gait); gaits missing from
     it are left out of every figure.
     """
     paths = []

@@ -320,7 +320,8 @@ def main(make, argv=None) -> list[str]:
     parser.add_argument("--duration", type=float, default=1.0, help="simulated seconds per gait (default 1)")
     parser.add_argument("--gaits", nargs="+", default=list(PAPER_GAITS), help="gaits to run")
     args = parser.parse_args(argv)
-    results = run_all([RunSpec(g, duration=args.duration) for g in args.gaits], args.cache)
+    runs = run_all([RunSpec(g, duration=args.duration) for g in args.gaits], args.cache)
+    results = {spec.gait: traj for spec, traj in runs.items()}
     paths = make(results, args.out, cobra_model())
     for p in paths:
         print(p)
