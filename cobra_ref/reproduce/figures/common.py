@@ -267,14 +267,25 @@ def draw_spread(ax, x: float, values: np.ndarray, color: str, gait: str, width: 
     return len(v) - len(finite)
 
 
-def spread_handles(n_members: int) -> list:
-    """Legend entries of ``draw_spread``: the members' dots and the 10-90 % bar.
+def ensemble_window(ensemble: dict | None) -> float | None:
+    """The seconds each member's summary covers (its ``duration``; the claims' window), or None.
+
+    Helper: figs. 6 and 9 say that the members' dots are over this window.
+    """
+    durations = [m.get("duration") for members in (ensemble or {}).values() for m in members if m.get("duration")]
+    return max(durations) if durations else None
+
+
+def spread_handles(n_members: int, window: float | None = None) -> list:
+    """Legend entries of ``draw_spread``: the members' dots (over their first ``window`` seconds,
+    when given) and the 10-90 % bar.
 
     Helper: figs. 6 and 9.
     """
     lo, hi = (round(100 * q) for q in ENSEMBLE_RANGE)
+    over = "" if window is None else f", first {window:g} s"
     return [Line2D([], [], marker="o", ls="none", ms=2.2, mfc="0.6", mec="k", mew=0.3,
-                   label=f"ensemble members (N = {n_members})"),
+                   label=f"ensemble members (N = {n_members}{over})"),
             Line2D([], [], color="k", lw=0.9, marker="_", ms=5, label=f"{lo}-{hi} % of the members")]
 
 

@@ -85,8 +85,9 @@ def plot_slopes(ax, rows, slopes: dict, ensemble: dict) -> None:
     ax.set_xlim(-0.6, len(rows) - 0.4)
     ax.set_ylabel("slope [J/J]")
     ax.grid(False, axis="x")
-    ax.legend(handles=[Line2D([], [], marker="D", ls="none", ms=3.5, color="0.4", label="nominal run")]
-              + common.spread_handles(n_members), loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3,
+    T = max((traj.duration for _, traj in rows), default=0.0)
+    ax.legend(handles=[Line2D([], [], marker="D", ls="none", ms=3.5, color="0.4", label=f"nominal run ({T:g} s)")]
+              + common.spread_handles(n_members, common.ensemble_window(ensemble)), loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3,
               fontsize=5.5)
 
 

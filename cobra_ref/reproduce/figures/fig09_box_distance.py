@@ -66,8 +66,10 @@ def plot_finals(ax, rows, finals: np.ndarray, unit: str, scale: float, ensemble:
         common.draw_spread(ax, x[i] + SPREAD_OFFSET / 2, values, colors[i], gait, width=SPREAD_WIDTH)
         n_members = max(n_members, len(values))
     if spread:
-        nominal = Patch(facecolor="0.6", label="nominal run (bar)")
-        ax.figure.legend(handles=[nominal] + common.spread_handles(n_members), loc="outside lower center", ncol=3)
+        T = max((traj.duration for _, traj in rows), default=0.0)
+        nominal = Patch(facecolor="0.6", label=f"nominal run, {T:g} s (bar)")
+        ax.figure.legend(handles=[nominal] + common.spread_handles(n_members, common.ensemble_window(ensemble)),
+                         loc="outside lower center", ncol=3)
     ax.margins(y=0.45)  # room above the tallest bar for its turned label
     ax.set_ylim(bottom=0.0)
     ax.set_xticks(x, [common.gait_label(g, t) for g, t in rows], rotation=30, ha="right")
