@@ -25,7 +25,7 @@ Bend profiles kappa_i of the rolling shapes (defaults: assumption A10):
                pitch joints unchanged (a reflection maps a rotation about y to itself)
 
 Every joint stays within |theta_i| <= A (rolling) or max(A_y, A_p) (sidewinding), which must be
-<= q_max = pi / 2 (assumption C4); bad values raise ``GaitError`` naming the parameter.
+<= q_max = pi / 2 (assumption A4); bad values raise ``GaitError`` naming the parameter.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 N_JOINTS = 11
-Q_MAX = np.pi / 2  # joint range, assumption C4 (CobraParameters.q_max)
+Q_MAX = np.pi / 2  # joint range, assumption A4 (CobraParameters.q_max)
 YAW = np.arange(N_JOINTS) % 2 == 0  # even joints yaw, odd joints pitch
 S = np.arange(N_JOINTS) / (N_JOINTS - 1)  # s_i = i / 10
 SHAPES = ("C", "S", "J", "J-mirror")

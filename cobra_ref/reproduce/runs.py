@@ -14,7 +14,7 @@ and the figures use that partial trajectory (the claims report says so). ``run_a
 runs to any ``concurrent.futures.Executor`` and reads every result back from the cache, so the
 numbers do not depend on where the runs ran.
 
-Box placement per gait (assumption C9, extended):
+Box placement per gait (assumption A9, extended):
 
 * C, S, J, J-mirror: the box starts 5 cm from the middle link on the concave side of the start
   shape, one face turned to the robot (``simulate.initial_state``). For S, whose shape has no
