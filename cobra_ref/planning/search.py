@@ -18,7 +18,7 @@ from ..executors import default_executor, shutdown
 from ..gaits import gait_params
 from .cost import evaluate
 from .problem import DEFAULT_MAXITER, DEFAULTS, ShootingError, ShootingProblem, make_problem
-from .results import write_result
+from .results import CHECK_DT, transfer, write_result
 
 
 @dataclass
@@ -39,6 +39,7 @@ class ShootingResult:
     interrupted: bool
     message: str
     wall_time: float
+    transfer: dict | None = None  # results.transfer of the optimum, when checked (optimize_gait)
 
     @property
     def params(self) -> dict:
@@ -219,12 +220,13 @@ def _not_called(x):
 
 def optimize_gait(name: str, goal=None, out: str | None = None, duration: float | None = None,
                   maxiter: int | None = None, executor: Executor | None = None, progress=None,
-                  **options) -> ShootingResult:
-    """Optimize one gait at its defaults (``DEFAULTS[name]``: goal, horizon, maxiter, unless given) and
-    write the params JSON to ``out`` (default ``optimized/<name>.json``; "" = do not write).
+                  check_dt: float | None = CHECK_DT, **options) -> ShootingResult:
+    """Optimize one gait at its defaults (``DEFAULTS[name]``: goal, horizon, maxiter, unless given),
+    check the optimum at ``check_dt`` (``results.transfer``; None = no check) and write the params
+    JSON to ``out`` (default ``optimized/<name>.json``; "" = do not write).
 
     Helper: what ``cobra-ref figures --reoptimize`` runs per gait. ``progress`` defaults to
-    lines on stderr; ``options`` go to ``make_problem`` (bounds, x0, ramp_time, ...) or
+    lines on stderr; ``options`` go to ``make_problem`` (bounds, x0, ramp_time, weights, ...) or
     ``optimize`` (method, seed, popsize, step, workers).
     """
     d_goal, d_duration, d_maxiter = DEFAULTS[name]
@@ -235,6 +237,14 @@ def optimize_gait(name: str, goal=None, out: str | None = None, duration: float 
         progress = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
     result = optimize(problem, maxiter=d_maxiter if maxiter is None else maxiter, executor=executor,
                       progress=progress, **{k: v for k, v in options.items() if k in run_keys})
+    if check_dt is not None and result.best["terms"] is not None:
+        x = [result.best["params"][n] for n in problem.names]
+        result.transfer = transfer(problem, x, result.best, check_dt)
+        t = result.transfer
+        progress(f"check at dt = {check_dt:g} s: box to goal {t['plan_distance_to_goal']:.4f} m (plan) -> "
+                 + ("failed: " + t["check_error"] if t["check_error"] else
+                    f"{t['check_distance_to_goal']:.4f} m (check); impact impulse "
+                    f"{t['plan_impact_impulse_per_s']:.4g} -> {t['check_impact_impulse_per_s']:.4g} N s/s"))
     out = os.path.join("optimized", f"{name}.json") if out is None else out
     if out:
         os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
