@@ -169,8 +169,8 @@ def pair_parameters(model: Model) -> list[tuple[str, str, dict]]:
     """(geom1, geom2, attributes) of every ``<pair>``: robot sphere-ground, robot sphere-box, box-ground.
 
     Implements: the contact mapping of assumption A27 (module docstring), per pair with
-    A_hat = w_a + w_b (``inverse_weights``) and the pair's mu (A13: ``model.mu`` with the
-    ground, A22: ``model.mu_rb`` between robot and box)::
+    A_hat = w_a + w_b (``inverse_weights``) and the pair's mu (A13: ``model.mu`` robot-ground,
+    ``model.mu_bg`` box-ground, A22: ``model.mu_rb`` robot-box)::
 
         solimp         = (d, d, 0.001, 0.5, 2)                     # constant impedance d
         solref         = (-k (1 - d) A_hat, -c (1 - d) A_hat)       # normal: f = -k r - c v
@@ -186,7 +186,7 @@ def pair_parameters(model: Model) -> list[tuple[str, str, dict]]:
     pairs = [(GROUND, name, w[b], model.mu) for b, name in sphere_geoms]
     for box in model.boxes:
         pairs += [(f"box_{box.body}", name, w[b] + w[box.body], model.mu_rb) for b, name in sphere_geoms]
-        pairs.append((GROUND, f"box_{box.body}", w[box.body], model.mu))
+        pairs.append((GROUND, f"box_{box.body}", w[box.body], model.mu_bg))
     return [(geom1, geom2, _pair_attributes(model, A_hat, mu)) for geom1, geom2, A_hat, mu in pairs]
 
 

@@ -76,6 +76,7 @@ class Model:
     visual_cylinders: tuple[tuple[float, float, float] | None, ...] = ()
     mu: float = 1.0  # Coulomb friction of robot-ground and box-ground contacts
     mu_robot_box: float | None = None  # robot-box contacts; None = the same as mu (see mu_rb)
+    mu_box_ground: float | None = None  # box-ground contacts; None = the same as mu (see mu_bg)
     # the compliant contact law and the joint servo (cobra_ref.compliance; CobraParameters' sources)
     contact_stiffness: float = 1e6  # k [N/m]
     contact_damping: float = 1e3  # d [N s/m]
@@ -93,6 +94,11 @@ class Model:
     def mu_rb(self) -> float:
         """Friction coefficient of robot-box contacts: mu_robot_box, or mu when that is None."""
         return self.mu if self.mu_robot_box is None else self.mu_robot_box
+
+    @property
+    def mu_bg(self) -> float:
+        """Friction coefficient of box-ground contacts: mu_box_ground, or mu when that is None."""
+        return self.mu if self.mu_box_ground is None else self.mu_box_ground
 
     def __post_init__(self):
         _validate(self)
@@ -172,7 +178,7 @@ def _validate(model: Model) -> None:
     for name in per_body:
         if len(getattr(model, name)) != nb:
             raise ModelError(f"{name} has {len(getattr(model, name))} entries, expected {nb} (one per body)")
-    for name in ("mu", "mu_robot_box"):
+    for name in ("mu", "mu_robot_box", "mu_box_ground"):
         value = getattr(model, name)
         if value is not None and not (np.isfinite(value) and value >= 0):
             raise ModelError(f"{name} must be finite and >= 0, got {value}")

@@ -59,6 +59,7 @@ class CobraParameters:
     gravity: float = 9.81
     mu: float = 1.0
     mu_robot_box: float = 0.5
+    mu_box_ground: float | None = None
     contact_stiffness: float = 1e6
     contact_damping: float = 1e3
     stiction_velocity: float = 1e-3
@@ -113,6 +114,7 @@ SOURCES: dict[str, str] = {
     "mu": "paper: dynamic friction coefficient 1.0, robot-ground and box-ground (A13)",
     "mu_robot_box": "assumption A22: 0.5 (the paper: one mu for every pair); with mu = 1 a rolling link "
                     "wedges the box into the ground",
+    "mu_box_ground": "paper: the same mu for box-ground as for robot-ground (A13); None = mu",
     "contact_stiffness": "assumption A12: Simscape's default 1e6 N/m (the paper's '1e-4 N/m' is a typo)",
     "contact_damping": "paper: 'damping coefficient 1e3 N s/m'",
     "stiction_velocity": "paper: smooth stick-slip 'critical velocity 1e-3 m/s' (A13)",
@@ -124,7 +126,7 @@ UNITS: dict[str, str] = {
     "length_head": "m", "radius_head": "m", "length_link": "m", "radius_link": "m",
     "length_tail": "m", "radius_tail": "m", "joint_gap": "m", "q_max": "rad",
     "tau_max": "N m", "qd_max": "rad/s", "box_size": "m", "box_mass": "kg", "servo_kp": "N m/rad",
-    "servo_kd": "N m s/rad", "gravity": "m/s^2", "mu": "-", "mu_robot_box": "-", "contact_stiffness": "N/m",
+    "servo_kd": "N m s/rad", "gravity": "m/s^2", "mu": "-", "mu_robot_box": "-", "mu_box_ground": "-", "contact_stiffness": "N/m",
     "contact_damping": "N s/m", "stiction_velocity": "m/s",
 }
 

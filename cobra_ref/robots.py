@@ -118,6 +118,7 @@ def cobra_model(params: CobraParameters | None = None, with_box: bool = True) ->
         visual_cylinders=tuple(visual),
         mu=p.mu,
         mu_robot_box=p.mu_robot_box,
+        mu_box_ground=p.mu_box_ground,
         contact_stiffness=p.contact_stiffness,
         contact_damping=p.contact_damping,
         stiction_velocity=p.stiction_velocity,

@@ -116,7 +116,8 @@ def meta(model: Model, settings: StepSettings, advance) -> dict:
     """
     owner = getattr(advance, "__self__", advance)
     return {"settings": asdict(settings), "model": model.name, "nq": model.nq, "nv": model.nv,
-            "mu": model.mu, "mu_robot_box": model.mu_rb, "stepper": "fast" if hasattr(owner, "chain") else "reference",
+            "mu": model.mu, "mu_robot_box": model.mu_rb, "mu_box_ground": model.mu_bg,
+            "stepper": "fast" if hasattr(owner, "chain") else "reference",
             "phase_seconds": dict(getattr(owner, "timing", {}))}
 
 

@@ -266,6 +266,7 @@ RULES = {
     # friction, the box and its placement
     "mu": Rule("mu", "-", 0.0, 2.0, why=MU_WHY),
     "mu_robot_box": Rule("mu_robot_box", "-", 0.0, 2.0, why=MU_WHY + "; A22: 0.5"),
+    "mu_box_ground": Rule("mu_box_ground", "-", 0.0, 2.0, why=MU_WHY + "; A13: the same as mu"),
     "box_mass": Rule("box_mass", "kg", 0.0, 100.0, low_open=True, why="the paper's box is 0.5 kg; A8"),
     "box_offset": Rule("box_offset", "m", -5.0, 5.0, why="from the middle of the robot, world axes; the robot "
                                                          "is 1.7 m long"),
@@ -318,10 +319,12 @@ PARAMETER_RULES = {
     "gravity": Rule("gravity", "m/s^2", 0.0, 100.0, why="A20: 9.81 m/s^2"),
     "mu": RULES["mu"],
     "mu_robot_box": RULES["mu_robot_box"],
+    "mu_box_ground": RULES["mu_box_ground"],
     "contact_stiffness": Rule("contact_stiffness", "N/m", 0.0, 1e10, low_open=True, why="A12: 1e6 N/m"),
     "contact_damping": Rule("contact_damping", "N s/m", 0.0, 1e8, why="A12: 1e3 N s/m"),
     "stiction_velocity": Rule("stiction_velocity", "m/s", 0.0, 1.0, low_open=True, why="A13: 1e-3 m/s"),
 }
+OPTIONAL_PARAMETERS = ("mu_box_ground",)  # None means "the same as mu"
 INERTIA_RULE = Rule("inertia", "kg m^2", 0.0, 100.0, low_open=True)
 
 
@@ -363,7 +366,7 @@ def check_parameters(params) -> None:
         value = getattr(params, f.name)
         if f.name.startswith("inertia_"):
             check_inertia(f.name, value)
-        elif f.name in PARAMETER_RULES:
+        elif f.name in PARAMETER_RULES and not (value is None and f.name in OPTIONAL_PARAMETERS):
             PARAMETER_RULES[f.name].check(value, f.name)
 
 

@@ -319,3 +319,28 @@ def test_the_fast_and_the_reference_stepper_take_the_same_steps(settings):
     reference = run(model, q, qd, 100, settings, "reference")
     np.testing.assert_allclose(fast[0], reference[0], atol=1e-9)
     np.testing.assert_allclose(fast[1], reference[1], atol=1e-9)
+
+
+@pytest.mark.parametrize("mu_box_ground, expected", [(0.3, 0.3), (None, 1.0)], ids=["own", "same-as-mu"])
+def test_the_box_slides_on_the_ground_with_its_own_friction_coefficient(mu_box_ground, expected, v0=1.0, n=50):
+    """COBRA's box, pushed away from the robot at 1 m/s, decelerates at mu_bg g: 0.3 g with
+    mu_box_ground = 0.3, and mu g = 1.0 g when it is left None (the same as the robot's
+    ground friction, A13). Within 1 % over 50 ms; the robot holds still, far from the box."""
+    from cobra_ref.fast.stepper import FastStepper
+    from cobra_ref.gaits import gait
+    from cobra_ref.params import CobraParameters
+    from cobra_ref.robots import cobra_model
+    from cobra_ref.start import initial_state
+
+    model = cobra_model(CobraParameters(mu_box_ground=mu_box_ground))
+    assert model.mu_bg == expected and model.mu == 1.0 and model.mu_rb == 0.5
+    ref = gait("C")
+    q, qd = initial_state(model, ref, StepSettings(), box_offset=(0.0, 0.6))
+    iv = model.v_idx[model.boxes[0].body].start
+    qd[iv:iv + 6] = [v0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    stepper, q_hold = FastStepper(model, StepSettings()), ref(0.0)[0]
+    hold = lambda t: (q_hold, 0 * q_hold, 0 * q_hold)  # noqa: E731
+    for k in range(n):
+        res = stepper.step(q, qd, k * 1e-3, hold)
+        q, qd = res.q, res.qd
+    np.testing.assert_allclose((v0 - qd[iv]) / (n * 1e-3), expected * GRAVITY, rtol=1e-2)

@@ -24,7 +24,8 @@ from .common import c_stdout_silenced, check_out, fail, gait_param, run_and_writ
 
 DEFAULT_DURATION = 10.0  # [s] (assumption A11)
 # options that change the model or the start: not with --params, which replays the optimum's own
-MODEL_OPTIONS = (("mu", "--mu"), ("mu_robot_box", "--mu-robot-box"), ("box_mass", "--box-mass"),
+MODEL_OPTIONS = (("mu", "--mu"), ("mu_robot_box", "--mu-robot-box"), ("mu_box_ground", "--mu-box-ground"),
+                 ("box_mass", "--box-mass"),
                  ("box_offset", "--box-offset"), ("box_yaw", "--box-yaw"), ("box_gap", "--box-gap"),
                  ("param", "--param"))
 
@@ -87,7 +88,7 @@ def _gait_params(items) -> dict:
 
 def _cobra_parameters(args) -> CobraParameters:
     """The model's parameters with the friction and box options applied (each checked by its rule)."""
-    changes = {name: getattr(args, name) for name in ("mu", "mu_robot_box", "box_mass")
+    changes = {name: getattr(args, name) for name in ("mu", "mu_robot_box", "mu_box_ground", "box_mass")
                if getattr(args, name, None) is not None}
     return CobraParameters(**changes)
 
@@ -170,9 +171,11 @@ def add_parsers(sub) -> None:
     p.add_argument("--stepper", choices=("fast", "reference"), default="fast",
                    help="fast (default) or reference (the readable step, slow; the same physics)")
     p.add_argument("--mu", type=RULES["mu"].arg("--mu"), default=None,
-                   help="friction coefficient robot-ground and box-ground (default 1.0; A13)")
+                   help="friction coefficient robot-ground, and box-ground unless --mu-box-ground (default 1.0; A13)")
     p.add_argument("--mu-robot-box", type=RULES["mu_robot_box"].arg("--mu-robot-box"), default=None,
                    help="friction coefficient of robot-box contacts (default 0.5; assumption A22)")
+    p.add_argument("--mu-box-ground", type=RULES["mu_box_ground"].arg("--mu-box-ground"), default=None,
+                   help="friction coefficient of box-ground contacts (default: the same as --mu; A13)")
     p.add_argument("--box-mass", type=RULES["box_mass"].arg("--box-mass"), default=None,
                    help="mass of the box [kg] (default 0.5)")
     p.add_argument("--box-offset", type=RULES["box_offset_pair"].arg("--box-offset"), default=None, metavar="DX,DY",

@@ -198,7 +198,7 @@ def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, dt: f
     recovered, any excess above tau_max penalised); ``contact`` = "compliant" (default) or "rigid". Raises ``ShootingError`` for an
     unknown gait, a goal that is not two finite numbers or is unreachable, bounds that are empty
     or exclude the initial guess, or values the gait rejects. Sidewinding runs one box-free simulation
-    (``reproduce.travel_direction``) to place the box.
+    (``placement.travel_placement``) to place the box.
     """
     if gait_name not in DECISION:
         raise ShootingError(f"unknown gait {gait_name!r}; gaits: {', '.join(DECISION)}")
@@ -292,13 +292,14 @@ def _box_placement(gait_name, ref, duration, dt, cobra, box_gap, servo, contact)
     """The common box pose, the initial guess's middle pose and (sidewinding) the box direction."""
     direction = None
     if gait_name == "sidewinding":
-        from ..reproduce.runs import RunSpec, travel_direction
+        from ..placement import travel_placement
 
-        spec = RunSpec(gait_name, duration=max(duration, 2.0 / ref.frequency), dt=dt, params=gait_params(ref))
+        settings = StepSettings(dt=dt, servo=servo, contact=contact)
         try:
-            direction = tuple(float(v) for v in travel_direction(spec))
+            placement = travel_placement(cobra_model(cobra, with_box=False), ref, dt, box_gap, settings)
         except SimulationError as exc:
             raise ShootingError(f"cannot place the box for the initial guess: {exc}") from None
+        direction, box_gap = placement.direction, placement.box_gap
     model = cobra_model(cobra)
     q0, _ = initial_state(model, ref, StepSettings(dt=dt, servo=servo, contact=contact), box_gap=box_gap,
                           box_direction=direction)

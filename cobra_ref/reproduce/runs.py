@@ -15,10 +15,10 @@ Box placement per gait (assumption C9, extended):
 * C, S, J, J-mirror: the box starts 5 cm from the middle link on the concave side of the start
   shape, one face turned to the robot (``simulate.initial_state``). For S, whose shape has no
   single concave side at the middle, it is the side the robot's centre of mass lies on.
-* sidewinding moves sideways along the ground instead of rolling in place, so its box goes 5 cm
-  from the middle link in the direction the gait *travels*: the horizontal displacement of the
-  robot's centre of mass in a box-free run of the same gait over two periods (``travel_direction``,
-  computed and cached with the run, reported in the trajectory's ``meta``).
+* sidewinding moves sideways along the ground instead of rolling in place, so its box goes in
+  the direction the gait *travels*, 5 cm beyond the band its wave sweeps
+  (``placement.travel_placement``, assumption A31; computed with the run, its direction and
+  clearance reported in the trajectory's ``meta``).
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ from .. import __version__
 from ..gaits import gait, gait_params
 from ..executors import worker_init
 from ..params import CobraParameters
+from ..placement import travel_placement
 from ..progress import progress_printer
 from ..robots import cobra_model
 from ..simulate import simulate
@@ -96,31 +97,6 @@ def physics_hash(extra=()) -> str:
     return h.hexdigest()
 
 
-def travel_direction(spec: RunSpec, periods: float = 2.0) -> np.ndarray:
-    """Unit horizontal direction in which the gait moves the robot's centre of mass, measured in a
-    box-free run over ``periods`` periods (at most the run's duration) from the same start.
-
-    Helper: the sidewinding box placement (module docstring).
-    """
-    model = cobra_model(with_box=False)
-    ref = spec.reference()
-    duration = min(spec.duration, periods / ref.frequency)
-    traj = simulate(model, ref, duration, StepSettings(dt=spec.dt))
-    robot = range(model.nb)
-    from ..kinematics import forward_kinematics
-
-    def com(q):
-        kin = forward_kinematics(model, q)
-        pts = np.array([kin.o[i] + kin.R[i] @ model.com[i] for i in robot])
-        return np.average(pts, axis=0, weights=[model.mass[i] for i in robot])[:2]
-
-    d = com(traj.q[-1]) - com(traj.q[0])
-    if np.linalg.norm(d) < 1e-6:
-        raise SimulationError(f"gait {spec.gait!r} does not move the robot in {duration} s; "
-                              "cannot place the box in its path")
-    return d / np.linalg.norm(d)
-
-
 def run(spec: RunSpec, cache_dir: str, force: bool = False, progress=None) -> tuple[Trajectory, bool]:
     """The trajectory of ``spec``, from the cache when it holds this exact run (unless ``force``),
     else simulated and stored. Returns (trajectory, came_from_cache).
@@ -135,8 +111,11 @@ def run(spec: RunSpec, cache_dir: str, force: bool = False, progress=None) -> tu
                 return Trajectory.from_npz(p), True
     model = cobra_model(spec.cobra_parameters(), with_box=True)
     ref = spec.reference()
-    direction = travel_direction(spec) if spec.gait == "sidewinding" else None
-    q0, qd0 = initial_state(model, ref, box_direction=direction)
+    placement = (travel_placement(cobra_model(spec.cobra_parameters(), with_box=False), ref, spec.dt)
+                 if spec.gait == "sidewinding" else None)
+    direction = None if placement is None else placement.direction
+    q0, qd0 = initial_state(model, ref, box_direction=direction,
+                            box_gap=0.05 if placement is None else placement.box_gap)
     try:
         traj = simulate(model, ref, spec.duration, StepSettings(dt=spec.dt), q0, qd0, progress=progress)
         out = path
@@ -145,7 +124,8 @@ def run(spec: RunSpec, cache_dir: str, force: bool = False, progress=None) -> tu
             raise
         traj, out = exc.trajectory, failed
     traj.meta.update({"gait": spec.gait, "gait_params": gait_params(ref), "cache_key": spec.key(),
-                      "box_direction": None if direction is None else [float(x) for x in direction]})
+                      "box_direction": None if direction is None else [float(x) for x in direction],
+                      "box_gap": None if placement is None else placement.box_gap})
     os.makedirs(cache_dir, exist_ok=True)
     traj.to_npz(out)
     return traj, False
