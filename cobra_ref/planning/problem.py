@@ -57,7 +57,8 @@ would take most of a short horizon).
 
 The common initial state (``start_state``): the box is placed once, by the rule of
 ``reproduce`` (5 cm from the middle link on the concave side of the initial guess's start shape;
-for sidewinding in the direction the initial guess travels), and kept there for every rollout.
+for sidewinding 5 cm ahead of the band the initial guess's wave sweeps, in the direction it
+travels, A31), and kept there for every rollout.
 Each candidate starts at rest in its own t = 0 shape (the servo starts on its
 reference), moved rigidly in the plane so that its middle (the midpoint of the centres of mass
 of L5 and L6, and the heading from L6 to L5) is where the initial guess's middle is: the box
@@ -96,11 +97,13 @@ DECISION = {  # gait -> ((parameter, lower, upper), ...)  (module docstring)
 # gait -> (goal (dx, dy) [m], horizon T [s], maxiter) of ``optimize_gait`` and ``cobra-ref optimize``:
 # the goal is about 1.5 times as far as the initial guess pushes the box in T, in the direction it pushes
 # it, rounded to 1 cm (measured with the compliant contact law and the position servo, dt 1 ms, 1.5 s:
-# C (0.106, -0.020), S (0.073, -0.137), J (0.209, -0.032), J-mirror (0.209, 0.032);
-# sidewinding (-0.10, -0.07) in 3 s: it reaches the box only after about 2.5 s, hence its longer T).
-# Measured on the shared 2-core machine: C 141 s (19 rollouts), sidewinding 79 s at maxiter 4.
+# C (0.106, -0.020), S (0.073, -0.137), J (0.209, -0.032), J-mirror (0.209, 0.032)).
+# Sidewinding, its box placed ahead of the wave's band (A31): the initial guess does not touch the box
+# in 1.5 s (push (0, 0): no direction to aim at) and pushes it (-0.126, -0.017) in 3 s, hence T = 3 s;
+# maxiter 3, as each of its rollouts costs twice a rolling gait's and a poll has 6 points (the budget of
+# ``regenerate.reoptimize``, docs/planning.md).
 DEFAULTS = {"C": ((0.16, -0.03), 1.5, 6), "S": ((0.11, -0.21), 1.5, 6), "J": ((0.31, -0.05), 1.5, 6),
-            "J-mirror": ((0.31, 0.05), 1.5, 6), "sidewinding": ((-0.15, -0.1), 3.0, 6)}
+            "J-mirror": ((0.31, 0.05), 1.5, 6), "sidewinding": ((-0.19, -0.02), 3.0, 3)}
 RAMP_TIME = 0.25  # [s] phase-rate ramp of every candidate (module docstring)
 DEFAULT_DURATION = 1.5  # [s] horizon T (rolling gaits, see DEFAULTS)
 DEFAULT_MAXITER = 6  # iterations (polls of the compass search, generations of DE)
