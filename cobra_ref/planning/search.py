@@ -110,8 +110,8 @@ def optimize(problem: ShootingProblem, method: str = "pattern", maxiter: int = D
     default: a 1.5 s rollout costs 5-15 s on the 2-core machine, so the 5-minute budget buys a few
     dozen rollouts; the compass search starts from the known-good default gait, needs no gradient
     (J is non-smooth through the contacts), uses the 2n independent polls to fill the cores, never
-    re-runs a point, and makes progress within a few dozen rollouts (C: cost 1.30 -> 0.17, box
-    0.077 -> 0.015 m from the goal in 22 rollouts). It has no randomness (``seed`` is recorded only).
+    re-runs a point, and makes progress within a few dozen rollouts (C at its defaults: cost 1.19 ->
+    0.060, box 0.055 -> 0.002 m from the goal in 22 rollouts). It has no randomness (``seed`` is recorded only).
     ``method="de"``: ``scipy.optimize.differential_evolution`` (best1bin, Latin hypercube start
     with x0 as its first member, ``popsize`` * n members, ``updating="deferred"``, ``polish=False``,
     ``rng=seed``), whose ``workers`` map is our executor: a global search for users with an
