@@ -99,11 +99,11 @@ DECISION = {  # gait -> ((parameter, lower, upper), ...)  (module docstring)
 # it, rounded to 1 cm (measured with the compliant contact law and the position servo, dt 1 ms, 1.5 s:
 # C (0.106, -0.020), S (0.073, -0.137), J (0.209, -0.032), J-mirror (0.209, 0.032)).
 # Sidewinding, its box placed ahead of the wave's band (A31): the initial guess does not touch the box
-# in 1.5 s (push (0, 0): no direction to aim at) and pushes it (-0.126, -0.017) in 3 s, hence T = 3 s;
-# maxiter 3, as each of its rollouts costs twice a rolling gait's and a poll has 6 points (the budget of
-# ``regenerate.reoptimize``, docs/planning.md).
+# in 1.5 s (push (0, 0): no direction to aim at) and pushes it (-0.126, -0.017) in 3 s, hence T = 3 s.
+# maxiter 6 for every gait: the whole ``regenerate.reoptimize`` then fits its 20-minute budget on 2 idle
+# cores (estimated from the measured runs, docs/planning.md "Timings").
 DEFAULTS = {"C": ((0.16, -0.03), 1.5, 6), "S": ((0.11, -0.21), 1.5, 6), "J": ((0.31, -0.05), 1.5, 6),
-            "J-mirror": ((0.31, 0.05), 1.5, 6), "sidewinding": ((-0.19, -0.02), 3.0, 3)}
+            "J-mirror": ((0.31, 0.05), 1.5, 6), "sidewinding": ((-0.19, -0.02), 3.0, 6)}
 RAMP_TIME = 0.25  # [s] phase-rate ramp of every candidate (module docstring)
 DEFAULT_DURATION = 1.5  # [s] horizon T (rolling gaits, see DEFAULTS)
 DEFAULT_MAXITER = 6  # iterations (polls of the compass search, generations of DE)
