@@ -70,11 +70,12 @@ def test_optimizer_lowers_the_cost_and_brings_the_box_closer_to_the_goal(serial_
 
 
 def test_cost_terms_add_up_to_the_cost(serial_result, problem):
-    """J = w_e E + w_g (d_T / d_0)^2 + w_tau P_tau + w_q P_q, with d_0 = |goal| (module docstring)."""
+    """J = w_e E + w_g (d_T / d_0)^2 + w_I I + w_tau P_tau + w_q P_q, with d_0 = |goal| (module docstring)."""
     w = problem.weights
     for e in serial_result.history:
         t = e["terms"]
-        expected = w.effort * t["effort"] + w.goal * t["goal"] + w.tau * t["tau_limit"] + w.q * t["q_limit"]
+        expected = (w.effort * t["effort"] + w.goal * t["goal"] + w.impact * t["impact"] + w.tau * t["tau_limit"]
+                    + w.q * t["q_limit"])
         np.testing.assert_allclose(e["cost"], expected, rtol=1e-14, err_msg=f"rollout {e['rollout']}")
         np.testing.assert_allclose(np.sqrt(t["goal"]) * np.hypot(*GOAL), e["box_distance_to_goal"], rtol=1e-12)
 
@@ -123,6 +124,112 @@ def test_ctrl_c_keeps_the_best_rollout_found_so_far(problem, tmp_path):
     assert result.interrupted and len(result.history) == 1
     record = sh.write_result(result, str(tmp_path / "p.json"))
     assert record["interrupted"] is True and record["params"]["frequency"] == 0.5
+
+
+# --- the impact term: the paper's "f_ext orthogonal to the gap functions and their derivative" ----------
+
+
+def made_up_trajectory(problem, impact_impulse, box_xy):
+    """A trajectory of 1.5 s at dt = 0.5 s (3 steps): no torque, no limit excess, the given impact
+    impulses per step [N s] and the box ending at box_xy (only what ``shooting_cost`` reads)."""
+    from types import SimpleNamespace
+
+    n = len(impact_impulse)
+    box = np.zeros((n + 1, 7))
+    box[-1, :2] = box_xy
+    steps = {"impact_impulse": np.asarray(impact_impulse, dtype=float), "tau_excess": np.full(n, -1.0),
+             "q_excess": np.full(n, -1.0)}
+    return SimpleNamespace(dt=0.5, tau=np.zeros((n, 11)), box_pose=box, steps=steps)
+
+
+def test_robot_weight_is_twelve_half_kilogram_bodies():
+    """m_robot g: head, 10 links and tail of 0.5 kg each (params.py) under 9.81 m/s^2; the box is not counted."""
+    from cobra_ref.planning.cost import robot_weight
+    from cobra_ref.robots import cobra_model
+
+    assert robot_weight(cobra_model()) == pytest.approx(12 * 0.5 * 9.81, rel=1e-12)
+    assert robot_weight(cobra_model(with_box=False)) == pytest.approx(58.86, rel=1e-12)
+
+
+def test_impact_term_is_zero_without_impacts_and_the_hand_computed_value_for_a_made_up_rollout():
+    """Worked example: the box ends on the goal and no torque acts, so J = w_I I. Without impacts
+    I = 0 and J = 0. With three impacts of a 0.5 kg link landing at 0.2 m/s (m v_a = 0.1 N s each)
+    over T = 1.5 s: I = 0.3 N s / (58.86 N * 1.5 s) = 0.3 / 88.29 = 0.00339789, J = 10 I = 0.0339789"""
+    from cobra_ref.planning.cost import shooting_cost
+
+    problem = dataclasses.replace(tiny_problem(), duration=1.5)
+    goal = problem.goal_world
+    calm = shooting_cost(problem, made_up_trajectory(problem, [0.0, 0.0, 0.0], goal))
+    assert calm["terms"]["impact"] == 0.0 and calm["cost"] == 0.0
+    hits = shooting_cost(problem, made_up_trajectory(problem, [0.1, 0.2, 0.0], goal))
+    assert hits["terms"]["impact"] == pytest.approx(0.3 / (58.86 * 1.5), rel=1e-12)
+    assert hits["terms"]["impact"] == pytest.approx(0.0033978933, rel=1e-8)
+    assert problem.weights.impact == 10.0
+    assert hits["cost"] == pytest.approx(10 * 0.3 / (58.86 * 1.5), rel=1e-12)
+    unweighted = dataclasses.replace(problem, weights=sh.problem.Weights(impact=0.0))
+    assert shooting_cost(unweighted, made_up_trajectory(problem, [0.1, 0.2, 0.0], goal))["cost"] == 0.0
+
+
+def test_each_rollouts_history_entry_carries_the_impact_term(serial_result, problem):
+    """terms["impact"] of every rollout = its impacts' impulse (contact report) / (m_robot g T)."""
+    for e in serial_result.history:
+        assert e["terms"]["impact"] == pytest.approx(
+            e["contact"]["impact_impulse"] / (58.86 * problem.duration), rel=1e-12, abs=0.0)
+    rollout = sh.rollout(problem, [serial_result.best["params"]["frequency"]])
+    assert serial_result.best["contact"]["impact_impulse"] == float(np.sum(rollout.steps["impact_impulse"]))
+
+
+# --- the plan-to-check transfer ----------------------------------------------------------------------
+
+
+def test_transfer_record_is_written_and_read_back(serial_result, problem, tmp_path):
+    """The optimum in the plan (dt = 1 ms, the numbers of its history entry) and in the check
+    (dt = 0.5 ms); written into the params JSON and read back by load_result. From 1 to 0.5 ms the
+    box displacement changes by about 1 % (docs/results.md); the box moves about 5 cm here, so the
+    two distances to the goal agree within 2 mm (four times that). A malformed record is refused."""
+    from cobra_ref.planning.results import transfer
+
+    x = [serial_result.best["params"]["frequency"]]
+    t = transfer(problem, x, serial_result.best)
+    assert (t["plan_dt"], t["check_dt"], t["check_error"]) == (1e-3, 5e-4, None)
+    assert t["plan_distance_to_goal"] == serial_result.best["box_distance_to_goal"]
+    assert t["plan_impact_impulse_per_s"] == serial_result.best["contact"]["impact_impulse"] / problem.duration
+    assert abs(t["check_distance_to_goal"] - t["plan_distance_to_goal"]) < 2e-3, t
+    assert t["check_impact_impulse_per_s"] >= 0.0
+    path = tmp_path / "checked.json"
+    sh.write_result(dataclasses.replace(serial_result, transfer=t), str(path))
+    assert sh.load_result(str(path))["transfer"] == t
+    record = json.loads(path.read_text())
+    record["transfer"]["check_distance_to_goal"] = "far"
+    path.write_text(json.dumps(record))
+    with pytest.raises(sh.ShootingError, match="malformed 'transfer'"):
+        sh.load_result(str(path))
+
+
+def test_committed_optima_load_and_replay():
+    """Every committed optimum (cobra_ref/optimized/*.json) loads, was found with the impact term
+    at its default weight, carries a transfer record whose plan numbers are its optimum's, and
+    replays: 0.2 s of the C optimum from its recorded start, the box at its recorded pose, the
+    joint torques within tau_max (the position servo)."""
+    from cobra_ref.planning.problem import Weights
+    from cobra_ref.reproduce.regenerate import DIRECTIONS, OPTIMIZED_DIR
+    from cobra_ref.simulate import simulate
+
+    names = ["C", "S", "J", "J-mirror", "sidewinding"] + [f"direction-{d}" for d in DIRECTIONS]
+    for name in names:
+        path = os.path.join(OPTIMIZED_DIR, f"{name}.json")
+        record = sh.load_result(path)
+        assert record["problem"].weights == Weights(), name
+        assert not record["interrupted"], name
+        t = record["transfer"]
+        assert t["check_error"] is None and t["check_dt"] == 5e-4, name
+        assert t["plan_distance_to_goal"] == record["box_distance_to_goal"], name
+        assert record["terms"]["impact"] == pytest.approx(
+            t["plan_impact_impulse_per_s"] / 58.86, rel=1e-12), name
+    run = params_reference(os.path.join(OPTIMIZED_DIR, "C.json"), duration=0.2)
+    traj = simulate(run.model, run.reference, run.duration, run.settings, run.q0, run.qd0)
+    np.testing.assert_array_equal(traj.box_pose[0], run.problem.box_pose0)
+    assert np.all(traj.steps["tau_excess"] <= 1e-12)
 
 
 # --- generic searches on a function known in closed form -----------------------------------------------
@@ -346,5 +453,6 @@ def test_figures_reoptimize_writes_one_params_json_per_gait_and_direction(tmp_pa
     for path in files.values():
         record = sh.load_result(path)
         assert record["problem"].duration == 0.3 and len(record["history"]) >= 1
+        assert record["transfer"]["check_dt"] == 5e-4 and record["transfer"]["check_error"] is None
     assert regenerate.optimized_files(str(tmp_path), ("C", "S")) == {"C": files["C"]}
     assert set(regenerate.optimized_params({"C": files["C"]})["C"]) >= {"amplitude", "frequency"}

@@ -8,16 +8,43 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..robots import cobra_model
 from ..step import SimulationError
 from ..trajectory import Trajectory
 from .problem import FAILED_COST, ShootingProblem, rollout
 
+
+def robot_weight(model) -> float:
+    """m_robot g [N]: the robot's weight (every body that is not a box) under the model's gravity.
+
+    Helper: the scale of the impact term (``impact_term``); 12 bodies (head, 10 links, tail)
+    x 0.5 kg x 9.81 m/s^2 = 58.86 N for COBRA.
+    """
+    boxes = {b.body for b in model.boxes}
+    mass = sum(m for i, m in enumerate(model.mass) if i not in boxes)
+    return float(mass * np.linalg.norm(model.gravity))
+
+
+def impact_term(traj: Trajectory, weight: float, duration: float) -> float:
+    """I = (total impact impulse of the rollout) / (m_robot g T), dimensionless.
+
+    Implements: [COBRA] sec. "Results", "contact forces f_ext stand orthogonal to gap functions and
+    their derivative" (no contact force where a gap closes with speed) as a penalty: the impulse of
+    every impact (assumption A26: a contact that starts carrying load while approaching faster
+    than 1 cm/s; m v_a per impact, ``steps["impact_impulse"]``) summed over the rollout, per
+    second, as a fraction of the robot's weight ``weight`` = m_robot g. Zero for a rollout without
+    impacts.
+    """
+    return float(np.sum(traj.steps["impact_impulse"])) / (weight * duration)
+
+
 def shooting_cost(problem: ShootingProblem, traj: Trajectory) -> dict:
     """The cost J of a rollout and its terms (module docstring).
 
-    Implements: the shooting cost (assumption A17), [COBRA] eq. (6) constraints (2), (3) as exact penalties::
+    Implements: the shooting cost (assumption A17), [COBRA] eq. (6) constraints (2), (3) as exact
+    penalties, and its non-impulsive condition as the impact term (assumption A28)::
 
-        J = w_e E + w_g (d_T / d_0)^2 + w_tau P_tau + w_q P_q
+        J = w_e E + w_g (d_T / d_0)^2 + w_I I + w_tau P_tau + w_q P_q
     """
     cp, w, T, dt = problem.cobra_parameters(), problem.weights, problem.duration, traj.dt
     # E = integral ||tau||^2 dt / (n tau_max^2 T)
@@ -28,9 +55,11 @@ def shooting_cost(problem: ShootingProblem, traj: Trajectory) -> dict:
     # P = integral max(0, excess) dt / (limit T), excess = max_i |.| - limit per step
     p_tau = dt * float(np.sum(np.maximum(traj.steps["tau_excess"], 0.0))) / (cp.tau_max * T)
     p_q = dt * float(np.sum(np.maximum(traj.steps["q_excess"], 0.0))) / (cp.q_max * T)
-    cost = w.effort * effort + w.goal * goal + w.tau * p_tau + w.q * p_q
+    # I = sum of the impacts' impulses / (m_robot g T)
+    impact = impact_term(traj, robot_weight(cobra_model(cp)), T)
+    cost = w.effort * effort + w.goal * goal + w.impact * impact + w.tau * p_tau + w.q * p_q
     return {"cost": cost, "box_distance_to_goal": d_T,
-            "terms": {"effort": effort, "goal": goal, "tau_limit": p_tau, "q_limit": p_q}}
+            "terms": {"effort": effort, "goal": goal, "impact": impact, "tau_limit": p_tau, "q_limit": p_q}}
 
 
 def contact_report(traj: Trajectory, tau_max: float) -> dict:

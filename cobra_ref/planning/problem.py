@@ -5,25 +5,37 @@ minimized joint torques tau such that generalized contact forces f_ext stand ort
 functions and their derivative" and "the goal is to move the box on the flat ground towards a
 specified point" (Eq. (6) constraints (2), (3) as penalties).
 
+The model every rollout runs (``ShootingProblem.contact``, ``.servo``, ``.dt``; the figures' model):
+the compliant contact law (spring-damper normal contact and smooth stick-slip friction,
+assumptions A12, A13), the position servo (each joint driven towards its reference, its torque
+clamped at tau_max = 9.2 N m, ``compliance.servo_rows``) and dt = 1 ms (A14). ``make_problem``
+also accepts the rigid law and the prescribed servo (``servo="prescribed"``: the joints follow the
+reference exactly and the torques are recovered, unbounded).
+
 The problem (``ShootingProblem``)::
 
     p = a gait family's parameters (below), bounded: lower <= p <= upper
     one rollout: simulate(p) over [0, T] from the common initial state (below)
-    J(p) = w_e * E + w_g * (d_T / d_0)^2 + w_tau * P_tau + w_q * P_q
+    J(p) = w_e * E + w_g * (d_T / d_0)^2 + w_I * I + w_tau * P_tau + w_q * P_q
 
     E     = 1 / (n tau_max^2 T) * integral ||tau||^2 dt        effort: mean squared joint torque
                                                                as a fraction of the stall torque^2
     d_T   = || p_box(T) - p_goal ||,  d_0 = || p_box(0) - p_goal ||   (horizontal, box centre)
+    I     = sum over impacts of m v_a / (m_robot g T)          impacts (A26, A28): impact impulse
+                                                               per second / the robot's weight
     P_tau = 1 / (tau_max T) * integral max(0, max_i |tau_i| - tau_max) dt    (tau_excess per step)
     P_q   = 1 / (q_max T)   * integral max(0, max_i |q_i| - q_max) dt        (q_excess per step)
 
-Every term is dimensionless. The limit penalties are exact (L1) penalties, linear in the excess:
-with the prescribed servo the joint torques of an impact step reach 5-10 tau_max for one step
-(the impulse that the prescribed joints must absorb, see ``stepper``), and a squared penalty
-would let those few steps dominate while barely seeing a sustained small excess. With
-prescribed joints |q| <= amplitude <= q_max by construction (``gaits``), so P_q is zero unless
-the PD servo is used; it is kept for completeness. A rollout whose simulation fails costs
-``FAILED_COST`` (and its history entry names the error).
+Every term is dimensionless. I is the paper's condition that the "generalized contact forces
+f_ext stand orthogonal to gap functions and their derivative": no contact force where a gap
+closes with speed, i.e. no impacts (``cost.impact_term``; ``Weights`` gives the weight and why).
+The limit penalties are exact (L1) penalties, linear in the excess (a squared penalty would
+barely see a sustained small excess). With the position servo the joint torque is clamped at
+tau_max at every step, so P_tau is zero by construction; it is kept for the prescribed servo,
+whose recovered torques are unbounded. |q| <= amplitude <= q_max holds for the reference
+(``gaits``), and the servo follows it with a lag, so P_q is zero unless a joint overshoots; it is
+kept to see that. A rollout whose simulation fails costs ``FAILED_COST`` (and its history entry
+names the error).
 
 Decision vectors (``DECISION``; phase phi_0 and the ramp are fixed, see below):
 
@@ -45,8 +57,9 @@ would take most of a short horizon).
 
 The common initial state (``start_state``): the box is placed once, by the rule of
 ``reproduce`` (5 cm from the middle link on the concave side of the initial guess's start shape;
-for sidewinding in the direction the initial guess travels), and kept there for every rollout.
-Each candidate starts at rest in its own t = 0 shape (the prescribed joints must start on their
+for sidewinding 5 cm ahead of the band the initial guess's wave sweeps, in the direction it
+travels, A31), and kept there for every rollout.
+Each candidate starts at rest in its own t = 0 shape (the servo starts on its
 reference), moved rigidly in the plane so that its middle (the midpoint of the centres of mass
 of L5 and L6, and the heading from L6 to L5) is where the initial guess's middle is: the box
 then faces the same link across the same gap whatever the amplitude.
@@ -83,11 +96,14 @@ DECISION = {  # gait -> ((parameter, lower, upper), ...)  (module docstring)
 }
 # gait -> (goal (dx, dy) [m], horizon T [s], maxiter) of ``optimize_gait`` and ``cobra-ref optimize``:
 # the goal is about 1.5 times as far as the initial guess pushes the box in T, in the direction it pushes
-# it (measured: C (0.13, -0.07), S (0.12, -0.11), J (0.22, -0.02), J-mirror (0.20, 0.02) in 1.5 s;
-# sidewinding (-0.10, -0.07) in 3 s: it reaches the box only after about 2.5 s, hence its longer T).
-# Measured on the shared 2-core machine: C 163 s (22 rollouts), sidewinding 79 s at maxiter 4.
-DEFAULTS = {"C": ((0.2, -0.1), 1.5, 6), "S": ((0.17, -0.16), 1.5, 6), "J": ((0.3, -0.02), 1.5, 6),
-            "J-mirror": ((0.3, 0.02), 1.5, 6), "sidewinding": ((-0.15, -0.1), 3.0, 6)}
+# it, rounded to 1 cm (measured with the compliant contact law and the position servo, dt 1 ms, 1.5 s:
+# C (0.106, -0.020), S (0.073, -0.137), J (0.209, -0.032), J-mirror (0.209, 0.032)).
+# Sidewinding, its box placed ahead of the wave's band (A31): the initial guess does not touch the box
+# in 1.5 s (push (0, 0): no direction to aim at) and pushes it (-0.126, -0.017) in 3 s, hence T = 3 s.
+# maxiter 6 for every gait: the whole ``regenerate.reoptimize`` then fits its 20-minute budget on 2 idle
+# cores (estimated from the measured runs, docs/planning.md "Timings").
+DEFAULTS = {"C": ((0.16, -0.03), 1.5, 6), "S": ((0.11, -0.21), 1.5, 6), "J": ((0.31, -0.05), 1.5, 6),
+            "J-mirror": ((0.31, 0.05), 1.5, 6), "sidewinding": ((-0.19, -0.02), 3.0, 6)}
 RAMP_TIME = 0.25  # [s] phase-rate ramp of every candidate (module docstring)
 DEFAULT_DURATION = 1.5  # [s] horizon T (rolling gaits, see DEFAULTS)
 DEFAULT_MAXITER = 6  # iterations (polls of the compass search, generations of DE)
@@ -104,15 +120,25 @@ class ShootingError(ValueError):
 
 @dataclass(frozen=True)
 class Weights:
-    """Weights of the cost terms (module docstring): J = effort E + goal (d_T/d_0)^2 + penalties.
+    """Weights of the cost terms (module docstring): J = effort E + goal (d_T/d_0)^2 + impacts I + penalties.
 
     Helper: the defaults make the goal term dominate until the box is within about 10 % of the
-    start distance (10 * 0.1^2 = 0.1, the effort E of the default rolling gaits is 0.09-0.13);
-    a sustained 10 % torque excess costs as much (P_tau = 0.1).
+    start distance (10 * 0.1^2 = 0.1; the effort E of the initial guesses is C 0.046, S 0.017,
+    J 0.055); a sustained 10 % torque excess costs as much (P_tau = 0.1). The impact weight makes
+    an impact impulse rate of 1 % of the robot's weight (I = 0.01: 0.59 N s per second, m_robot g
+    = 58.86 N for COBRA) cost as much as the goal term at 10 % of the start distance:
+    w_I = 0.1 / 0.01 = 10. Measured on the initial guesses (1.5 s, the compliant contact law and
+    the position servo at dt 1 ms): C I = 0.00064 (3 impacts, 0.037 N s/s), S 0.0020 (9 impacts,
+    0.12 N s/s), J and J-mirror 0.0145 (17 impacts, 0.85 N s/s); over C's first 19 rollouts
+    0.0003-0.0026; sidewinding (3 s, its box ahead of the wave) 0.047 (46 impacts, 2.76 N s/s).
+    The term then costs 0.006-0.02 for C and S, less than their effort, and 0.145 for J and 0.47
+    for sidewinding, more than their effort: it weighs where the impacts are large and does not
+    trade the goal for small ones.
     """
 
     effort: float = 1.0
     goal: float = 10.0
+    impact: float = 10.0
     tau: float = 1.0
     q: float = 1.0
 
@@ -170,10 +196,10 @@ def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, dt: f
     (default: every bounded one), the other gait parameters stay at the initial guess;
     ``x0`` = {name: value} overrides the initial guess (default: the gait's defaults, with
     phase 0 and ``ramp_time``); ``box_gap`` = the gap between the box and the middle link at the
-    start (``simulate.initial_state``, assumption C9: 5 cm); ``servo`` = "prescribed" (the paper's
-    "motion provided": joints follow the reference exactly, torques recovered, impact spikes above
-    tau_max reported and penalised) or "pd" (torques saturated at tau_max, so the torque limit holds
-    at every step by construction; the joints then lag the reference). Raises ``ShootingError`` for an
+    start (``simulate.initial_state``, assumption C9: 5 cm); ``servo`` = "position" (default: the
+    joint torques clamped at tau_max, so the torque limit holds at every step by construction; the
+    joints lag the reference) or "prescribed" (joints follow the reference exactly, torques
+    recovered, any excess above tau_max penalised); ``contact`` = "compliant" (default) or "rigid". Raises ``ShootingError`` for an
     unknown gait, a goal that is not two finite numbers or is unreachable, bounds that are empty
     or exclude the initial guess, or values the gait rejects. Sidewinding runs one box-free simulation
     (``placement.travel_placement``) to place the box.

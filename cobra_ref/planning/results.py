@@ -6,6 +6,7 @@ and of the figures.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from dataclasses import asdict
@@ -19,6 +20,12 @@ from ..robots import cobra_model
 from ..trajectory import Trajectory
 from .cost import shooting_cost
 from .problem import DECISION, FORMAT, ShootingError, ShootingProblem, Weights, rollout, start_state
+
+CHECK_DT = 5e-4  # [s] the high-fidelity check's step: from 1 to 0.5 ms the box displacement of C and J
+# changes by -1.1 % and -0.5 %, and from 0.5 to 0.25 ms torque and power peaks by < 0.5 %
+# (docs/results.md, "Does a result hold when dt halves?"): 0.5 ms is the converged setting.
+TRANSFER_KEYS = ("plan_dt", "check_dt", "plan_distance_to_goal", "check_distance_to_goal",
+                 "plan_impact_impulse_per_s", "check_impact_impulse_per_s")
 
 def problem_to_dict(problem: ShootingProblem) -> dict:
     """The problem as JSON-ready settings (every input of a rollout).
@@ -139,6 +146,37 @@ def code_version() -> dict:
     return {"version": __version__, "physics_sha256": physics_hash(("planning",))}
 
 
+def transfer(problem: ShootingProblem, x, plan_entry: dict | None = None, check_dt: float = CHECK_DT) -> dict:
+    """The optimum x in the plan (the rollout at the planner's dt) and in the high-fidelity check
+    (the same parameters and start replayed at ``check_dt``): box distance to the goal [m] and
+    impact impulse per second [N s/s] in each (``TRANSFER_KEYS``), and the check's error if its
+    simulation failed (its numbers are then None).
+
+    Helper: the transfer record of a params JSON ("transfer"). ``plan_entry``: the optimum's
+    history entry (its numbers are used; None = roll the plan out again). The check starts from
+    the same box pose and robot middle as the plan (``start_state`` with the check's dt).
+    """
+    from ..step import SimulationError
+
+    def numbers(traj) -> tuple:
+        d = float(np.linalg.norm(traj.box_pose[-1, :2] - problem.goal_world))
+        return d, float(np.sum(traj.steps["impact_impulse"])) / problem.duration
+
+    if plan_entry is None:
+        plan = numbers(rollout(problem, x))
+    else:
+        plan = (plan_entry["box_distance_to_goal"], plan_entry["contact"]["impact_impulse"] / problem.duration)
+    record = {"plan_dt": problem.dt, "check_dt": float(check_dt), "plan_distance_to_goal": plan[0],
+              "check_distance_to_goal": None, "plan_impact_impulse_per_s": plan[1],
+              "check_impact_impulse_per_s": None, "check_error": None}
+    try:
+        check = numbers(rollout(dataclasses.replace(problem, dt=float(check_dt)), x))
+        record.update(check_distance_to_goal=check[0], check_impact_impulse_per_s=check[1])
+    except SimulationError as exc:
+        record["check_error"] = str(exc)
+    return record
+
+
 def result_to_dict(result: ShootingResult) -> dict:
     """The params JSON: ``params`` (the optimum), ``history``, and every setting to re-run it.
 
@@ -152,7 +190,8 @@ def result_to_dict(result: ShootingResult) -> dict:
             "settings": problem_to_dict(result.problem),
             "optimizer": {"method": result.method, "seed": result.seed, "maxiter": result.maxiter,
                           "iterations": result.iterations, "rollouts": len(result.history), **result.options},
-            "code": code_version(), "wall_time": result.wall_time, "history": result.history}
+            "code": code_version(), "wall_time": result.wall_time,
+            **({"transfer": result.transfer} if result.transfer is not None else {}), "history": result.history}
 
 
 def write_result(result: ShootingResult, path: str) -> dict:
@@ -212,6 +251,12 @@ def load_result(path: str) -> dict:
         if not lo <= v <= hi:
             raise ShootingError(f"{path}: params {n} = {v:g} is outside the optimization's bounds [{lo:g}, {hi:g}] "
                                 "(settings.decision): not an optimum of this problem")
+    if "transfer" in record:
+        t = record["transfer"]
+        if not isinstance(t, dict) or any(k not in t for k in TRANSFER_KEYS) or not all(
+                t[k] is None or (is_number(t[k]) and np.isfinite(t[k])) for k in TRANSFER_KEYS):
+            raise ShootingError(f"{path}: malformed 'transfer': expected {{{', '.join(TRANSFER_KEYS)}}} "
+                                f"as finite numbers (or null where the check failed), got {t!r}")
     record["problem"] = problem
     return record
 

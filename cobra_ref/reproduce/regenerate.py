@@ -173,9 +173,9 @@ def optimized_params(files: dict) -> dict:
 
 
 def reoptimize(directory: str, gaits=PAPER_GAITS, progress: bool = True) -> dict:
-    """Run the optimizer for every gait at its defaults (``shooting.DEFAULTS``) and for the
-    direction goals (``DIRECTIONS``), writing the params JSONs into ``directory``; return
-    {name: path}.
+    """Run the optimizer for every gait at its defaults (``planning.problem.DEFAULTS``) and for the
+    direction goals (``DIRECTIONS``), each optimum checked at dt = 0.5 ms (``planning.results.transfer``),
+    writing the params JSONs into ``directory``; return {name: path}.
 
     Helper: ``cobra-ref figures --reoptimize``.
     """
