@@ -276,6 +276,13 @@ REFUSED = [
     ("mjcf-link-to-directory", ["export-mjcf", "{here}/dirlink"], 1, "is a directory"),
     # --- optimize (refused before any rollout)
     ("optimize-dt", ["optimize", "--gait", "C", "--dt", "0.1", "--out", "{here}/p.json"], 2, "--dt = 0.1 s is out of range"),
+    ("optimize-mu-high", ["optimize", "--gait", "C", "--mu", "5", "--out", "{here}/p.json"], 2, "--mu = 5 is out of range"),
+    ("optimize-box-mass-zero", ["optimize", "--gait", "C", "--box-mass", "0", "--out", "{here}/p.json"], 2,
+     "--box-mass = 0 kg is out of range"),
+    ("optimize-mu-box-ground-nan", ["optimize", "--gait", "C", "--mu-box-ground", "nan", "--out", "{here}/p.json"], 2,
+     "--mu-box-ground = nan is not finite"),
+    ("simulate-mu-box-ground-negative", ["simulate", "--mu-box-ground=-0.1", "--out", "{here}/r.npz"], 2,
+     "--mu-box-ground = -0.1 is out of range"),
     ("optimize-goal-word", ["optimize", "--gait", "C", "--goal", "a,b", "--out", "{here}/p.json"], 2,
      "--goal X = 'a' is not a number"),
     ("optimize-goal-far", ["optimize", "--gait", "C", "--goal", "9,0", "--out", "{here}/p.json"], 1,

@@ -196,7 +196,7 @@ def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, dt: f
     (default: every bounded one), the other gait parameters stay at the initial guess;
     ``x0`` = {name: value} overrides the initial guess (default: the gait's defaults, with
     phase 0 and ``ramp_time``); ``box_gap`` = the gap between the box and the middle link at the
-    start (``simulate.initial_state``, assumption C9: 5 cm); ``servo`` = "position" (default: the
+    start (``simulate.initial_state``, assumption A9: 5 cm); ``servo`` = "position" (default: the
     joint torques clamped at tau_max, so the torque limit holds at every step by construction; the
     joints lag the reference) or "prescribed" (joints follow the reference exactly, torques
     recovered, any excess above tau_max penalised); ``contact`` = "compliant" (default) or "rigid". Raises ``ShootingError`` for an
