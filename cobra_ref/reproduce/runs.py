@@ -24,13 +24,14 @@ Box placement per gait (assumption A9, extended):
   (``placement.travel_placement``, assumption A31; computed with the run, its direction and
   clearance reported in the trajectory's ``meta``).
 
-An ensemble member's box is placed by the same rule (for sidewinding, from a box-free run of the
-member's own gait, its phase shifted and its frictions scaled), then shifted by ``box_shift`` and
+An ensemble member's box is placed by the same rule as its nominal run's (for sidewinding, the
+nominal run's box-free placement, ``nominal_placement``), then shifted by ``box_shift`` and
 turned by ``box_turn`` (``start.placed_state``); its frictions are scaled by ``mu_scale``.
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -96,6 +97,11 @@ class RunSpec:
                   "version": __version__}
         h.update(json.dumps(record, sort_keys=True, default=str).encode())
         h.update(physics_hash().encode())
+        # and how a run is set up from its spec (the placement, the members' perturbations)
+        here = os.path.dirname(os.path.abspath(__file__))
+        for name in ("runs.py", "ensemble.py"):
+            with open(os.path.join(here, name), "rb") as f:
+                h.update(f.read())
         return h.hexdigest()
 
     def label(self) -> str:
@@ -139,6 +145,23 @@ def run(spec: RunSpec, cache_dir: str, force: bool = False, progress=None) -> tu
     return traj, False
 
 
+def nominal_placement(spec: RunSpec):
+    """The travelling gait's box placement (``placement.travel_placement``) of the nominal run of
+    ``spec``: its gait parameters and frictions without the member's perturbation, so every member
+    starts from the same placement before its own shift and turn.
+
+    Helper: ``simulate_spec``; computed once per process for each nominal run (a box-free run).
+    """
+    nominal = replace(spec, member=None)
+    return _placement(nominal.gait, json.dumps(nominal.params, sort_keys=True), nominal.dt, nominal.mu_robot_box)
+
+
+@functools.lru_cache(maxsize=None)
+def _placement(gait_name: str, params_json: str, dt: float, mu_robot_box):
+    spec = RunSpec(gait_name, dt=dt, params=json.loads(params_json), mu_robot_box=mu_robot_box)
+    return travel_placement(cobra_model(spec.cobra_parameters(), with_box=False), spec.reference(), dt)
+
+
 def simulate_spec(spec: RunSpec, progress=None) -> tuple[Trajectory, bool]:
     """Simulate ``spec`` from its placed and settled start, its member's perturbation applied;
     return (trajectory, failed): a run that fails mid-way returns what it computed, its error set.
@@ -147,8 +170,7 @@ def simulate_spec(spec: RunSpec, progress=None) -> tuple[Trajectory, bool]:
     """
     model = cobra_model(spec.cobra_parameters(), with_box=True)
     ref = spec.reference()
-    placement = (travel_placement(cobra_model(spec.cobra_parameters(), with_box=False), ref, spec.dt)
-                  if spec.gait == "sidewinding" else None)
+    placement = nominal_placement(spec) if spec.gait == "sidewinding" else None
     direction = None if placement is None else placement.direction
     member = spec.member
     q0, qd0 = initial_state(model, ref, box_direction=direction,
