@@ -397,3 +397,30 @@ __all__ = ["joint_rates", "locomotion_power", "locomotion_work", "box_point_velo
            "summary", "percentile_99", "robot_weight", "gait_period", "steady_start", "coefficient_of_variation",
            "power_cv", "phase_correlation", "joint_phase_correlation",
            "ROBOT_GROUND", "ROBOT_BOX", "BOX_GROUND"]
+
+
+def tracking_errors(traj) -> dict:
+    """The position servo's joint tracking error: ``max_tracking_error`` and ``rms_tracking_error``
+    [rad], the largest and the RMS over the steps of max_j |q_j - q_ref,j| at each step's end.
+
+    Helper: reported per gait (the servo of assumption A7 lags its reference).
+    """
+    e = np.asarray(traj.steps["tracking_error"], dtype=float)
+    if not len(e):
+        return {"max_tracking_error": 0.0, "rms_tracking_error": 0.0}
+    return {"max_tracking_error": float(e.max()), "rms_tracking_error": float(np.sqrt(np.mean(e**2)))}
+
+
+def ledger_residual(traj) -> float:
+    """abs(W_act + W_contact - Delta(KE + PE)) / abs(W_act): the share of the actuators' work that the
+    bodies' work-energy balance misses over the run.
+
+    Implements: the energy ledger of ``step.energies`` summed over the run; what remains is the
+    integrator's energy error (first order in dt).
+    """
+    s = traj.steps
+    if not len(traj.tau):
+        return 0.0
+    W_act, W_contact = float(s["work_actuators"][:-1].sum()), float(s["work_contacts"][:-1].sum())
+    E = s["kinetic"] + s["potential"]
+    return abs(W_act + W_contact - float(E[-1] - E[0])) / max(abs(W_act), 1e-9)

@@ -197,3 +197,27 @@ def test_impact_rate_and_the_robot_weight():
     traj.steps["impact_impulse"][[10, 50]] = [0.1, 0.2]
     s = analysis.summary(traj)
     assert s["impact_impulse_per_second"] == pytest.approx(0.15) and s["robot_weight"] == pytest.approx(58.86)
+
+
+def test_tracking_errors_are_the_largest_and_the_rms_of_the_per_step_error():
+    """Per-step largest joint errors 0.01, 0.02, 0.02 rad: largest 0.02, RMS sqrt(0.0009 / 3)."""
+    from types import SimpleNamespace
+
+    traj = SimpleNamespace(steps={"tracking_error": np.array([0.01, 0.02, 0.02])})
+    out = analysis.tracking_errors(traj)
+    assert out["max_tracking_error"] == 0.02
+    assert out["rms_tracking_error"] == pytest.approx(np.sqrt(0.0009 / 3), rel=1e-12)
+
+
+def test_the_ledger_residual_is_what_the_work_energy_balance_misses():
+    """Two steps: the actuators do 3 J, the contacts -1 J, the bodies gain 1.5 J of kinetic and
+    potential energy: the balance misses 3 - 1 - 1.5 = 0.5 J, a sixth of the actuators' work (the
+    last row's works belong to no step and are left out); an exact balance leaves 0."""
+    from types import SimpleNamespace
+
+    steps = {"work_actuators": np.array([1.0, 2.0, 9.0]), "work_contacts": np.array([-0.5, -0.5, 9.0]),
+             "kinetic": np.array([0.0, 0.5, 1.0]), "potential": np.array([2.0, 2.2, 2.5])}
+    traj = SimpleNamespace(steps=steps, tau=np.zeros((2, 11)))
+    assert analysis.ledger_residual(traj) == pytest.approx(0.5 / 3, rel=1e-12)
+    steps["potential"] = np.array([2.0, 2.2, 3.0])
+    assert analysis.ledger_residual(traj) == pytest.approx(0.0, abs=1e-15)

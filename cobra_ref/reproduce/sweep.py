@@ -28,6 +28,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from .. import analysis
 from ..gaits import gait
 from ..params import CobraParameters
 from ..planning.problem import DECISION
@@ -98,9 +99,8 @@ def measures(traj) -> dict:
     Helper: per-run numbers of the sweep.
     """
     s = traj.steps
-    W_act, W_contact = float(s["work_actuators"][:-1].sum()), float(s["work_contacts"][:-1].sum())
-    E = s["kinetic"] + s["potential"]
-    ledger = abs(W_act + W_contact - (E[-1] - E[0])) / max(abs(W_act), 1e-9)
+    W_contact = float(s["work_contacts"][:-1].sum())
+    ledger = analysis.ledger_residual(traj)
     dissipation = -W_contact - float(s["elastic"][-1] - s["elastic"][0])
     qx, qy = traj.box_pose[:, 4], traj.box_pose[:, 5]
     tilt = np.degrees(np.arccos(np.clip(1 - 2 * (qx**2 + qy**2), -1.0, 1.0)))
