@@ -343,3 +343,16 @@ def test_ensemble_summaries_keep_scenario_i_at_index_i():
     tl = by_id(ensemble_claims(e))["TL"]
     assert (tl["ensemble"]["n"], tl["ensemble"]["left_out"]) == (3, {"S[1]": "no run"})
     assert by_id(ensemble_claims(e))["GT"]["verdict"] == "does not hold"  # the boxes did not move
+
+
+def test_a_claim_about_each_run_gives_each_gaits_own_verdict():
+    """NI over two gaits: C's 8 runs are within 1 % of m g, J's 8 are not; over all 16 runs the
+    claim is undecided (8 of 16), and the per-gait verdicts say where it holds."""
+    from cobra_ref.reproduce.claims import ensemble_claims
+
+    def run(rate):
+        return {"impact_impulse_per_second": rate, "robot_weight": 58.86, "error": None}
+
+    ni = next(c for c in ensemble_claims({"C": [run(0.1)] * 8, "J": [run(1.0)] * 8}) if c["id"] == "NI")
+    assert ni["verdict"] == "undecided" and ni["ensemble"]["holds"] == 8
+    assert ni["details"]["per gait"] == {"C": "holds (8 of 8)", "J": "does not hold (0 of 8)"}

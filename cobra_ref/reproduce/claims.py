@@ -292,15 +292,19 @@ def _steering(ensemble):
 
 def _per_run(ensemble, cid, text, keys, statistic, condition, details=None, gaits=None):
     """A claim about each run: ``condition(summary)`` per member of every gait (``gaits``, default
-    all), ``statistic(summary)`` its number."""
+    all), ``statistic(summary)`` its number. The verdict is over all the runs; ``details["per
+    gait"]`` gives each gait's own verdict by the same rule ("C: holds (8 of 8)")."""
     gaits = list(ensemble) if gaits is None else [g for g in gaits if g in ensemble]
     failed = _failed_runs(ensemble, gaits)
-    values, results = {}, []
+    values, results, per_gait = {}, [], {}
     for g in gaits:
         members = [s for s in ensemble[g] if _ok(s, keys)]
         if members:
             values[g] = _stats([statistic(s) for s in members])
-            results += [bool(condition(s)) for s in members]
+            held = [bool(condition(s)) for s in members]
+            results += held
+            per_gait[g] = f"{verdict(len(held), sum(held))[1]} ({sum(held)} of {len(held)})"
+    details = {**(details or {}), **({"per gait": per_gait} if per_gait else {})}
     return _entry(cid, text, values, results, failed, details, reason=f"no run with {', '.join(keys)}")
 
 
