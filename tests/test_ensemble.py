@@ -225,3 +225,17 @@ def test_a_committed_file_that_is_not_a_claims_report_is_refused(tmp_path):
     path.write_text(json.dumps({"E": True}))
     with pytest.raises(ValueError, match="is not a claims report"):
         check.read_committed(str(path))
+
+
+def test_check_leaves_out_the_mujoco_claims_only_when_this_run_made_no_mujoco_comparison(capsys):
+    """Without mujoco the regenerated report has no MJ-travel/MJ-box entries: the committed ones
+    are left out with a note and the rest agrees (exit 0). With a MuJoCo comparison in the run, a
+    committed MuJoCo claim that is missing is a mismatch (exit 1)."""
+    from cobra_ref.cli.figures import check_report
+
+    wb = _entry("WB", True, 2.0, 1.5, 2.5)
+    travel_C, travel_S = ({"id": f"MJ-travel-{g}", "holds": True} for g in ("C", "S"))
+    assert check_report([wb, travel_C, travel_S], [wb]) == 0
+    assert "its 2 committed claims are not compared" in capsys.readouterr().err
+    assert check_report([wb, travel_C, travel_S], [wb, travel_C]) == 1
+    assert "MJ-travel-S: committed, missing from the regenerated report" in capsys.readouterr().err
