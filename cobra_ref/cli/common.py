@@ -177,3 +177,34 @@ def gait_param(text: str) -> tuple:
 
 
 gait_param.allowed = "NAME=VALUE: a parameter of the gait, a finite number in the gait's range"
+
+
+# CobraParameters that simulate and optimize take as options (each checked by its rule)
+MODEL_PARAMETERS = ("mu", "mu_robot_box", "mu_box_ground", "box_mass")
+
+
+def add_model_options(p) -> None:
+    """--mu, --mu-robot-box, --mu-box-ground and --box-mass on parser ``p``.
+
+    Helper: the command line (cobra-ref simulate, optimize).
+    """
+    from ..validation import RULES
+
+    p.add_argument("--mu", type=RULES["mu"].arg("--mu"), default=None,
+                   help="friction coefficient robot-ground, and box-ground unless --mu-box-ground (default 1.0; A13)")
+    p.add_argument("--mu-robot-box", type=RULES["mu_robot_box"].arg("--mu-robot-box"), default=None,
+                   help="friction coefficient of robot-box contacts (default 0.5; assumption A22)")
+    p.add_argument("--mu-box-ground", type=RULES["mu_box_ground"].arg("--mu-box-ground"), default=None,
+                   help="friction coefficient of box-ground contacts (default: the same as --mu; A13)")
+    p.add_argument("--box-mass", type=RULES["box_mass"].arg("--box-mass"), default=None,
+                   help="mass of the box [kg] (default 0.5)")
+
+
+def model_parameters(args):
+    """``CobraParameters`` with the model options given on the command line (``add_model_options``).
+
+    Helper: the command line (cobra-ref simulate, optimize).
+    """
+    from ..params import CobraParameters
+
+    return CobraParameters(**{name: getattr(args, name) for name in MODEL_PARAMETERS if getattr(args, name) is not None})

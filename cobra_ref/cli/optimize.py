@@ -14,12 +14,8 @@ from ..executors import SerialExecutor
 from ..planning.problem import DECISION, DEFAULTS, RAMP_TIME, ShootingError, make_problem
 from ..planning.results import summary_lines, write_result
 from ..planning.search import optimize
-from ..params import CobraParameters
 from ..validation import RULES
-from .common import c_stdout_silenced, check_writable
-
-# CobraParameters that the command line can change (each checked by its rule)
-MODEL_OPTIONS = ("mu", "mu_robot_box", "mu_box_ground", "box_mass")
+from .common import add_model_options, c_stdout_silenced, check_writable, model_parameters
 
 
 def _assignments(items, n_values: int, what: str) -> dict:
@@ -71,14 +67,7 @@ def add_parsers(sub) -> None:
                    help="contact law of the rollouts (default compliant)")
     p.add_argument("--box-gap", type=RULES["box_gap"].arg("--box-gap"), default=0.05,
                    help="gap between the box and the middle link at the start [m] (default 0.05, assumption A9)")
-    p.add_argument("--mu", type=RULES["mu"].arg("--mu"), default=None,
-                   help="friction coefficient robot-ground, and box-ground unless --mu-box-ground (default 1.0; A13)")
-    p.add_argument("--mu-robot-box", type=RULES["mu_robot_box"].arg("--mu-robot-box"), default=None,
-                   help="friction coefficient of robot-box contacts (default 0.5; assumption A22)")
-    p.add_argument("--mu-box-ground", type=RULES["mu_box_ground"].arg("--mu-box-ground"), default=None,
-                   help="friction coefficient of box-ground contacts (default: the same as --mu; A13)")
-    p.add_argument("--box-mass", type=RULES["box_mass"].arg("--box-mass"), default=None,
-                   help="mass of the box [kg] (default 0.5)")
+    add_model_options(p)
     p.add_argument("--maxiter", type=RULES["maxiter"].arg("--maxiter"), default=None,
                    help="iterations: polls of the compass search, generations of DE (default 6)")
     p.add_argument("--method", choices=("pattern", "de"), default="pattern",
@@ -114,8 +103,7 @@ def cmd_optimize(args) -> int:
         try:
             problem = make_problem(args.gait, goal, duration=duration, dt=args.dt, ramp_time=args.ramp_time,
                                    box_gap=args.box_gap, servo=args.servo, contact=args.contact,
-                                   cobra=CobraParameters(**{name: getattr(args, name) for name in MODEL_OPTIONS
-                                                            if getattr(args, name) is not None}),
+                                   cobra=model_parameters(args),
                                    bounds=_assignments(args.bound, 2, "--bound"),
                                    x0=_assignments(args.start, 1, "--start"))
         except ShootingError as exc:

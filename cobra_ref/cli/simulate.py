@@ -14,13 +14,12 @@ import dataclasses
 import sys
 
 from ..gaits import GAITS, gait_params
-from ..params import CobraParameters
 from ..planning.cost import shooting_cost
 from ..planning.problem import ShootingError
 from ..planning.results import ParamsRun, params_reference
 from ..robots import cobra_model
 from ..validation import RULES, ValidationError, time_grid
-from .common import c_stdout_silenced, check_out, fail, gait_param, run_and_write
+from .common import add_model_options, c_stdout_silenced, check_out, fail, gait_param, model_parameters, run_and_write
 
 DEFAULT_DURATION = 10.0  # [s] (assumption A11)
 # options that change the model or the start: not with --params, which replays the optimum's own
@@ -52,7 +51,7 @@ def cmd_simulate(args) -> int:
         settings = StepSettings(dt=args.dt, contact=args.contact, servo=args.servo)
         duration = DEFAULT_DURATION if args.duration is None else args.duration
         time_grid(duration, settings.dt, exact=True, duration_field="--duration", dt_field="--dt")
-        cobra = _cobra_parameters(args)
+        cobra = model_parameters(args)
     except ValueError as exc:  # ValidationError
         raise fail(exc) from None
     source = args.reference or f"gait {args.gait}"
@@ -84,13 +83,6 @@ def _gait_params(items) -> dict:
             raise fail(f"--param {name} is given twice ({out[name]:g} and {value:g})")
         out[name] = value
     return out
-
-
-def _cobra_parameters(args) -> CobraParameters:
-    """The model's parameters with the friction and box options applied (each checked by its rule)."""
-    changes = {name: getattr(args, name) for name in ("mu", "mu_robot_box", "mu_box_ground", "box_mass")
-               if getattr(args, name, None) is not None}
-    return CobraParameters(**changes)
 
 
 def _start(model, reference, settings, args):
@@ -170,14 +162,7 @@ def add_parsers(sub) -> None:
                         "(the joints follow the reference exactly, torques recovered)")
     p.add_argument("--stepper", choices=("fast", "reference"), default="fast",
                    help="fast (default) or reference (the readable step, slow; the same physics)")
-    p.add_argument("--mu", type=RULES["mu"].arg("--mu"), default=None,
-                   help="friction coefficient robot-ground, and box-ground unless --mu-box-ground (default 1.0; A13)")
-    p.add_argument("--mu-robot-box", type=RULES["mu_robot_box"].arg("--mu-robot-box"), default=None,
-                   help="friction coefficient of robot-box contacts (default 0.5; assumption A22)")
-    p.add_argument("--mu-box-ground", type=RULES["mu_box_ground"].arg("--mu-box-ground"), default=None,
-                   help="friction coefficient of box-ground contacts (default: the same as --mu; A13)")
-    p.add_argument("--box-mass", type=RULES["box_mass"].arg("--box-mass"), default=None,
-                   help="mass of the box [kg] (default 0.5)")
+    add_model_options(p)
     p.add_argument("--box-offset", type=RULES["box_offset_pair"].arg("--box-offset"), default=None, metavar="DX,DY",
                    help="the box's centre relative to the middle of the robot [m], world axes (x = the robot's "
                         "heading, y = its left; a negative DX needs --box-offset=-0.1,0.2); default: beside the "

@@ -40,7 +40,6 @@ import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, field, replace
 
-import numpy as np
 
 from .. import __version__
 from ..gaits import gait, gait_params
