@@ -115,6 +115,7 @@ class RollingGait(_Periodic):
         _check("amplitude", self.amplitude, high=Q_MAX)
         _check("s_J", self.s_J, strict=False, high=1.0)
         self._check_periodic()
+        object.__setattr__(self, "_kappa", self.kappa())  # the profile is fixed: computed once, not per call
 
     def kappa(self) -> np.ndarray:
         """The bend profile kappa_i [rad] of the 11 joints (module docstring)."""
@@ -128,7 +129,7 @@ class RollingGait(_Periodic):
 
     def __call__(self, t: float):
         phi, phid, phidd = self._phase(t)
-        kappa = self.kappa()
+        kappa = self._kappa
         q = kappa * np.where(YAW, np.cos(phi), np.sin(phi))
         dq = kappa * np.where(YAW, -np.sin(phi), np.cos(phi))  # d theta / d phi
         # chain rule: qd = dq phi', qdd = d2q phi'^2 + dq phi'', and d2q = -q for sines and cosines

@@ -138,35 +138,38 @@ def rollout(model: Model, reference, q0, duration: float, timestep: float = TIME
     t = np.arange(n + 1) * timestep
     qpos = np.zeros((n + 1, m.nq))
     qpos[0] = d.qpos
-    stats, hinge_q = _Stats(), [model.q_idx[i].start for i in _hinges(model)]
+    hinge_q = [model.q_idx[i].start for i in _hinges(model)]
+    q_refs, forces = np.zeros((n, len(hinge_q))), np.zeros((n, m.nu))
+    penetration, contacts = 0.0, 0
     start = time.perf_counter()
+    # the loop does only what needs the live mjData; the statistics come from its records afterwards
     for k in range(n):
         q_ref, qd_ref, _ = reference(t[k + 1])
         d.ctrl[:] = servo_control(model, q_ref, qd_ref)
         mujoco.mj_step(m, d)
-        if not np.all(np.isfinite(d.qpos)) or d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number:
-            raise MujocoRolloutError(f"MuJoCo diverged at step {k}, t = {t[k]:.4f} s (timestep {timestep:g} s)")
-        qpos[k + 1] = d.qpos
-        stats.add(d, q_ref, hinge_q)
-    return MujocoRollout(t=t, qpos=qpos, max_penetration=stats.max_penetration,
-                         mean_contacts=stats.contacts / max(n, 1), max_tracking_error=stats.max_tracking,
-                         max_joint_torque=stats.max_torque, n_warnings=int(sum(w.number for w in d.warning)),
-                         wall_time=time.perf_counter() - start)
-
-
-class _Stats:
-    """Running contact and servo statistics of a rollout."""
-
-    def __init__(self):
-        self.max_penetration, self.contacts, self.max_torque, self.max_tracking = 0.0, 0, 0.0, 0.0
-
-    def add(self, d, q_ref, hinge_q) -> None:
+        qpos[k + 1], forces[k], q_refs[k] = d.qpos, d.actuator_force, q_ref
         # mjContact.dist < 0 is a penetration (the contacts of the step's start state)
         if d.ncon:
-            self.max_penetration = max(self.max_penetration, -float(d.contact.dist[:d.ncon].min()))
-        self.contacts += d.ncon
-        self.max_torque = max(self.max_torque, float(np.abs(d.actuator_force).max(initial=0.0)))
-        self.max_tracking = max(self.max_tracking, float(np.abs(d.qpos[hinge_q] - q_ref).max(initial=0.0)))
+            contacts += d.ncon
+            penetration = max(penetration, -float(d.contact.dist[:d.ncon].min()))
+        if (k + 1) % DIVERGENCE_CHECK == 0 or k + 1 == n:
+            _check_diverged(mujoco, d, qpos, k, timestep)
+    return MujocoRollout(t=t, qpos=qpos, max_penetration=penetration, mean_contacts=contacts / max(n, 1),
+                         max_tracking_error=float(np.abs(qpos[1:, hinge_q] - q_refs).max(initial=0.0)),
+                         max_joint_torque=float(np.abs(forces).max(initial=0.0)),
+                         n_warnings=int(sum(w.number for w in d.warning)), wall_time=time.perf_counter() - start)
+
+
+DIVERGENCE_CHECK = 100  # [steps] how often a rollout checks its state for NaN or a bad acceleration
+
+
+def _check_diverged(mujoco, d, qpos, k: int, timestep: float) -> None:
+    """Raise ``MujocoRolloutError`` naming the first step that left a non-finite state in
+    ``qpos[:k + 2]``, or step k if MuJoCo reported a bad acceleration (it then resets the state)."""
+    bad = np.flatnonzero(~np.isfinite(qpos[:k + 2]).all(axis=1))
+    if len(bad) or d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number:
+        j = int(bad[0]) - 1 if len(bad) else k
+        raise MujocoRolloutError(f"MuJoCo diverged at step {j}, t = {j * timestep:.4f} s (timestep {timestep:g} s)")
 
 
 def robot_com(model: Model, q) -> np.ndarray:

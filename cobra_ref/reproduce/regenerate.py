@@ -204,10 +204,6 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
     Helper: the body of ``cobra-ref figures``. ``n_members`` (N >= 1) members per gait;
     ``executor``: where the runs go (``runs.run_all``; default a process pool on the cores).
     """
-    from . import claims as claims_mod
-    from .figures import FIGURES
-    from ..robots import cobra_model
-
     start = time.perf_counter()
     if isinstance(n_members, bool) or not isinstance(n_members, (int, np.integer)) or n_members < 1:
         raise ValueError(f"members per gait must be a whole number >= 1, got {n_members!r}")
@@ -230,6 +226,38 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
     _say(progress, f"simulating {len(specs)} gaits x {n_members} member(s): member 0 {every[0].duration:g} s, "
                    f"the others {T:g} s (cache: {cache_dir})")
     runs = run_all(every, cache_dir, force=force, workers=workers, progress=progress, executor=executor)
+    # the MuJoCo comparison and the optima's replays run in a pool while this process draws the figures
+    side = _side_pool(executor)
+    try:
+        return _finish(specs, every, runs, T, files_opt, params, out_dir, cache_dir, optimized_dir, gaits, n_members,
+                       quick, mujoco, force, progress, side, start)
+    finally:
+        if executor is None:
+            side.shutdown()
+
+
+def _side_pool(executor):
+    """The executor of the work that follows the runs (``executor`` if given, else a process pool on the cores)."""
+    if executor is not None:
+        return executor
+    from concurrent.futures import ProcessPoolExecutor
+
+    from ..executors import worker_init
+
+    return ProcessPoolExecutor(os.cpu_count() or 1, initializer=worker_init)
+
+
+def _finish(specs, every, runs, T, files_opt, params, out_dir, cache_dir, optimized_dir, gaits, n_members, quick,
+            mujoco, force, progress, side, start) -> dict:
+    """Steps 2-3 of the module docstring once the runs are done: the MuJoCo rows and the optima's
+    replays go to ``side`` first, then the figures and the claims are made here."""
+    from . import claims as claims_mod
+    from .figures import FIGURES
+    from ..robots import cobra_model
+
+    # the replays first: their figure is drawn before the MuJoCo figure
+    replays = _replays_submit(side, optimized_dir, gaits, cache_dir) if optimized_dir else []
+    pending = _mujoco_submit(side, specs, runs, T, cache_dir, force, progress) if mujoco else None
     results = {g: runs[members[0]] for g, members in specs.items()}
     ensemble = ensemble_summaries(specs, runs, T, goal_directions(files_opt))
     model = cobra_model(with_box=True)
@@ -253,7 +281,7 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
         files += written
         _say(progress, f"  {name}: {len(written)} file(s), {time.perf_counter() - t0:.1f} s")
     if optimized_dir and os.path.isdir(optimized_dir):
-        files += _optimization_figures(optimized_dir, gaits, out_dir, cache_dir, progress)
+        files += _optimization_figures(optimized_dir, gaits, out_dir, cache_dir, progress, replays)
     summaries = claims_mod.gait_summaries(results)
     report = ensemble_report(ensemble)
     settings = {"duration (s)": every[0].duration, "dt (s)": every[0].dt, "quick": quick,
@@ -266,7 +294,7 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
                 "box direction (sidewinding)": results["sidewinding"].meta.get("box_direction")
                 if "sidewinding" in results else None}
     if mujoco:
-        report += _mujoco_rows(specs, runs, T, out_dir, cache_dir, progress, files, force)
+        report += _mujoco_rows(pending, out_dir, progress, files)
     paths = {"claims.json": json.dumps(_clean(report), indent=1),
              "claims.md": claims_mod.to_markdown(report, summaries, settings),
              "summary.json": json.dumps(_clean({"gaits": summaries, "ensemble": ensemble, "settings": settings}),
@@ -296,54 +324,69 @@ def ensemble_report(ensemble: dict) -> list[dict]:
     return report
 
 
-def _mujoco_rows(specs, runs, window_s, out_dir, cache_dir, progress, files, force: bool = False) -> list[dict]:
-    """The MuJoCo comparison as claims, and its figure; empty, with a note on stderr, when mujoco
-    is not installed (it is an optional extra).
+def _mujoco_submit(side, specs, runs, window_s, cache_dir, force: bool, progress) -> dict | None:
+    """Start the MuJoCo comparison on ``side``, or read it from the cache; None, with a note on
+    stderr, when mujoco is not installed (it is an optional extra).
 
     Helper: (a) the robot alone, each gait, ``mujoco_check.TRAVEL_DURATION`` seconds in both
     simulators; (b) per gait the first K = min(N, ``MUJOCO_MEMBERS``) members, each from its own
     settled start (q0, qd0) with its own friction scale, the box displacement after
     ``BOX_DURATION`` seconds (or the ensemble window if shorter), ours read off the member's run.
-    Every row is cached in ``cache_dir`` under a hash of its inputs (``_mujoco_key``); the figure
-    is kept when its rows came from the cache and it was drawn from them (``.stamps.json``);
-    ``force`` computes and draws everything again.
+    Every row is cached in ``cache_dir`` under a hash of its inputs (``_mujoco_key``); ``force``
+    computes them again. ``_mujoco_rows`` collects them.
     """
-    from .mujoco_check import claims, mujoco_available
+    from .mujoco_check import mujoco_available
 
     if not mujoco_available():
         _say(progress, "  MuJoCo comparison skipped: mujoco is not installed (pip install mujoco)")
-        return []
+        return None
     done = {g: members for g, members in specs.items() if not runs[members[0]].error}
     if not done:
-        return []
-    t0 = time.perf_counter()
+        return None
     duration = min(BOX_DURATION, window_s, min(runs[m[0]].duration for m in done.values()))
     k = min(len(next(iter(done.values()))), MUJOCO_MEMBERS)
     boxed = {g: [m for m in members[:k] if not runs[m].error] for g, members in done.items()}
     key = _mujoco_key(boxed, runs, duration)
-    cached = os.path.join(cache_dir, f"mujoco-{key[:16]}.json")
-    rows = _read_json(cached).get("rows") if os.path.isfile(cached) and not force else None
-    if rows is None:
-        rows = _mujoco_compute(boxed, runs, duration)
-        os.makedirs(cache_dir, exist_ok=True)
-        write_text(cached, json.dumps({"key": key, "rows": _clean(rows)}))
+    job = {"key": key, "cached": os.path.join(cache_dir, f"mujoco-{key[:16]}.json"), "gaits": len(done), "k": k,
+           "t0": time.perf_counter(), "rows": None, "futures": []}
+    if os.path.isfile(job["cached"]) and not force:
+        job["rows"] = _read_json(job["cached"]).get("rows")
+    if job["rows"] is None:
+        job["futures"] = _mujoco_compute(side, boxed, runs, duration)
+    return job
+
+
+def _mujoco_rows(job: dict | None, out_dir, progress, files) -> list[dict]:
+    """The MuJoCo comparison of ``_mujoco_submit`` as claims, and its figure (appended to ``files``).
+
+    Helper: waits for the rows, caches computed ones; the figure is kept when its rows came from
+    the cache and it was drawn from them (``.stamps.json``).
+    """
+    from .figures import fig_mujoco_check
+    from .mujoco_check import claims
+
+    if job is None:
+        return []
+    if job["rows"] is None:
+        job["rows"] = [row for f in job["futures"] for row in f.result()]
+        os.makedirs(os.path.dirname(job["cached"]), exist_ok=True)
+        write_text(job["cached"], json.dumps({"key": job["key"], "rows": _clean(job["rows"])}))
         what = "computed"
     else:
         what = "from the cache"
-    from .figures import fig_mujoco_check
-
     stamps_path = os.path.join(out_dir, ".stamps.json")
-    stamps, stamp = _read_json(stamps_path), _stamp({"mujoco": key}, fig_mujoco_check)
+    stamps, stamp = _read_json(stamps_path), _stamp({"mujoco": job["key"]}, fig_mujoco_check)
     old = stamps.get("fig_mujoco_check", {})
     if what == "from the cache" and old.get("stamp") == stamp and all(os.path.isfile(f) for f in old.get("files", [])):
         files += old["files"]
     else:
-        written = fig_mujoco_check.make(rows, out_dir)
+        written = fig_mujoco_check.make(job["rows"], out_dir)
         stamps["fig_mujoco_check"] = {"stamp": stamp, "files": written}
         write_text(stamps_path, json.dumps(stamps, indent=1))
         files += written
-    _say(progress, f"  MuJoCo comparison: {len(done)} gaits x {k} member(s), {what}, {time.perf_counter() - t0:.1f} s")
-    return claims(rows)
+    _say(progress, f"  MuJoCo comparison: {job['gaits']} gaits x {job['k']} member(s), {what}, "
+                   f"{time.perf_counter() - job['t0']:.1f} s")
+    return claims(job["rows"])
 
 
 def _mujoco_key(boxed: dict, runs: dict, duration: float) -> str:
@@ -365,37 +408,51 @@ def _mujoco_key(boxed: dict, runs: dict, duration: float) -> str:
     return h.hexdigest()
 
 
-def _mujoco_compute(boxed: dict, runs: dict, duration: float) -> list[dict]:
-    """The travel rows and the box-ensemble rows (each gait's MuJoCo rollouts in a worker process)."""
-    from concurrent.futures import ProcessPoolExecutor
-
-    from ..executors import worker_init
+def _mujoco_compute(executor, boxed: dict, runs: dict, duration: float) -> list:
+    """Futures of the box-ensemble rows and the travel rows, one task per gait and kind on ``executor``
+    (each a list of rows), the box rows first (the longest)."""
     from .mujoco_check import box_ensemble_rows, robot_travel_rows
 
-    params = {g: runs[members[0]].meta.get("gait_params", {}) for g, members in boxed.items()}
-    with ProcessPoolExecutor(min(len(boxed), os.cpu_count() or 1), initializer=worker_init) as pool:
-        ensembles = {}
-        for g, members in boxed.items():
-            ensembles[g] = []
-            for spec in members:
-                r = runs[spec]
-                n = min(int(round(duration / r.dt)), len(r.box_pose) - 1)
-                ensembles[g].append({"reference": spec.reference(), "q0": r.q[0], "qd0": r.qd[0],
-                                     "mu_scale": 1.0 if spec.member is None else spec.member.mu_scale,
-                                     "ours": r.box_pose[n, :2] - r.box_pose[0, :2]})
-        boxes = [pool.submit(box_ensemble_rows, {g: e}, duration) for g, e in ensembles.items()]
-        rows = robot_travel_rows(list(boxed), params=params, executor=pool)
-        for f in boxes:
-            rows += f.result()
-    return rows
+    ensembles = {}
+    for g, members in boxed.items():
+        ensembles[g] = []
+        for spec in members:
+            r = runs[spec]
+            n = min(int(round(duration / r.dt)), len(r.box_pose) - 1)
+            ensembles[g].append({"reference": spec.reference(), "q0": r.q[0], "qd0": r.qd[0],
+                                 "mu_scale": 1.0 if spec.member is None else spec.member.mu_scale,
+                                 "ours": r.box_pose[n, :2] - r.box_pose[0, :2]})
+    boxes = [executor.submit(box_ensemble_rows, {g: e}, duration) for g, e in ensembles.items()]
+    travel = [executor.submit(robot_travel_rows, [g], params={g: runs[members[0]].meta.get("gait_params", {})})
+              for g, members in boxed.items()]
+    # the rows in the order they always had: every travel row, then every box row
+    return travel + boxes
 
 
 BOX_DURATION = 3.0  # [s] the box comparison with MuJoCo (0.1 ms steps there: 30 000 per member)
 
 
-def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, progress: bool) -> list[str]:
+def _optimum_paths(directory: str, gaits) -> list[str]:
+    """The params JSONs in ``directory`` that the optimization figures show: one per gait, then ``DIRECTIONS``."""
+    paths = [os.path.join(directory, f"{g}.json") for g in gaits]
+    paths += [os.path.join(directory, f"direction-{name}.json") for name in DIRECTIONS]
+    return [p for p in paths if os.path.isfile(p)]
+
+
+def _replays_submit(executor, directory: str, gaits, cache_dir: str) -> list:
+    """Futures of the optima's replays (``_replayed_box_path``) on ``executor``, for those not yet cached."""
+    if not os.path.isdir(directory):
+        return []
+    return [executor.submit(_replayed_box_path, p, cache_dir) for p in _optimum_paths(directory, gaits)
+            if not os.path.isfile(_replay_cache(p, cache_dir))]
+
+
+def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, progress: bool,
+                          replays=None) -> list[str]:
     """``fig_optimization`` (one optimum per gait) and ``fig_directions`` (``DIRECTIONS``) from the
-    params JSONs in ``directory``; each optimum is replayed once and its box path cached."""
+    params JSONs in ``directory``; each optimum is replayed once and its box path cached.
+    ``replays``: futures of replays already started (``_replays_submit``); default: replayed here,
+    in parallel."""
     from .figures.fig_optimization import make
     from ..planning.results import load_result
 
@@ -408,17 +465,19 @@ def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, p
         return out
 
     t0 = time.perf_counter()
-    # replay the optima not yet cached, in parallel (each is an independent simulation)
-    paths = [os.path.join(directory, f"{g}.json") for g in gaits]
-    paths += [os.path.join(directory, f"direction-{name}.json") for name in DIRECTIONS]
-    paths = [p for p in paths if os.path.isfile(p)]
-    if len(paths) > 1:
-        from concurrent.futures import ProcessPoolExecutor
+    if replays is None:
+        paths = _optimum_paths(directory, gaits)
+        if len(paths) > 1:
+            from concurrent.futures import ProcessPoolExecutor
 
-        from ..executors import worker_init
+            from ..executors import worker_init
 
-        with ProcessPoolExecutor(min(len(paths), os.cpu_count() or 1), initializer=worker_init) as pool:
-            list(pool.map(_replayed_box_path, paths, [cache_dir] * len(paths)))
+            with ProcessPoolExecutor(min(len(paths), os.cpu_count() or 1), initializer=worker_init) as pool:
+                replays = _replays_submit(pool, directory, gaits, cache_dir)
+                for f in replays:
+                    f.result()
+    for f in replays or []:
+        f.result()  # re-raises a replay's exception here
     per_gait = runs([(g, g, os.path.join(directory, f"{g}.json")) for g in gaits])
     directions = runs([(f"{name}: {g}", g, os.path.join(directory, f"direction-{name}.json"))
                        for name, (g, _) in DIRECTIONS.items()])
@@ -435,12 +494,9 @@ def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, p
 def _replayed_box_path(path: str, cache_dir: str) -> np.ndarray:
     """(n, 2) box path of the optimum of the params JSON ``path``, replayed once and cached under a
     hash of the JSON and the physics source."""
-    from .runs import physics_hash
     from ..planning.results import replay
 
-    with open(path, "rb") as f:
-        key = hashlib.sha256(f.read() + physics_hash(("planning",)).encode()).hexdigest()[:16]
-    cached = os.path.join(cache_dir, f"optimum-{key}.npy")
+    cached = _replay_cache(path, cache_dir)
     if os.path.isfile(cached):
         return np.load(cached)
     traj, _ = replay(path)
@@ -448,6 +504,15 @@ def _replayed_box_path(path: str, cache_dir: str) -> np.ndarray:
     os.makedirs(cache_dir, exist_ok=True)
     atomic_write(cached, lambda tmp: np.save(tmp, xy))
     return xy
+
+
+def _replay_cache(path: str, cache_dir: str) -> str:
+    """Where ``_replayed_box_path`` caches the optimum ``path``: a hash of the JSON and the physics source."""
+    from .runs import physics_hash
+
+    with open(path, "rb") as f:
+        key = hashlib.sha256(f.read() + physics_hash(("planning",)).encode()).hexdigest()[:16]
+    return os.path.join(cache_dir, f"optimum-{key}.npy")
 
 
 def _shown(path: str) -> str:
