@@ -34,7 +34,7 @@ import numpy as np
 
 from . import compliance
 from .compliance import LAWS
-from .contact import BOX_GROUND, ROBOT_BOX, Contacts, contact_jacobian, find_contacts
+from .contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND, Contacts, contact_jacobian, find_contacts
 from .dynamics import bias_force, crba, potential_energy
 from .kinematics import forward_kinematics, integrate
 from .least_action import LeastAction, LeastActionInfo, delassus, kkt_residuals, solve_least_action
@@ -199,7 +199,10 @@ def least_action_problem(model: Model, G, c_free, contacts: Contacts, q, q_ref, 
     if settings.servo == "position":
         R[3 * m:], b[3 * m:] = compliance.servo_rows(model, q[joints.q], q_ref, qd_ref, dt)
         lo, hi = -joints.tau_max * dt, joints.tau_max * dt
-    mu = np.select([contacts.kind == ROBOT_BOX, contacts.kind == BOX_GROUND], [model.mu_rb, model.mu_bg], model.mu)
+    # each contact's coefficient of friction, looked up by its kind
+    mu_of_kind = np.empty(3)
+    mu_of_kind[[ROBOT_GROUND, ROBOT_BOX, BOX_GROUND]] = model.mu, model.mu_rb, model.mu_bg
+    mu = mu_of_kind[contacts.kind]
     v_s = model.stiction_velocity if law == "compliant" else 0.0
     return LeastAction(G + np.diag(R), c_free + b, mu, lo, hi, v_s)
 
