@@ -17,8 +17,10 @@ import cobra_ref as cr
 from cobra_ref.executors import SerialExecutor
 from cobra_ref.gaits import gait
 from cobra_ref.reproduce import mujoco_check as mc
+from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import simulate
 from cobra_ref.start import initial_state
+from cobra_ref.step import StepSettings
 
 mujoco = pytest.importorskip("mujoco", reason="the MuJoCo comparison needs the optional dependency mujoco")
 
@@ -234,3 +236,13 @@ def test_public_functions_name_what_they_implement():
             continue
         doc = inspect.getdoc(obj) or ""
         assert "Implements:" in doc or "Helper:" in doc, f"mujoco_check.{fname}"
+
+
+def test_a_rollout_that_blows_up_is_an_error_naming_when():
+    """A start moving at 1e30 m/s is more than MuJoCo can integrate: it warns (BADQVEL) and resets
+    the state to its start, and would go on as if nothing happened; the rollout raises instead,
+    naming the step by which it happened, rather than return a reset trajectory."""
+    model = cobra_model()
+    q0, qd0 = initial_state(model, gait("C"), StepSettings())
+    with pytest.raises(mc.MujocoRolloutError, match=r"diverged by step \d+.*BADQVEL"):
+        mc.rollout(model, gait("C"), q0, 0.05, qd0=np.full(model.nv, 1e30))

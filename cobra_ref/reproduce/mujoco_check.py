@@ -124,7 +124,7 @@ def rollout(model: Model, reference, q0, duration: float, timestep: float = TIME
 
     Implements: the MuJoCo rollout of the module docstring. Per step k, before ``mj_step``,
     ctrl = ``servo_control``(q_ref(t_k+1), qd_ref(t_k+1)). Raises ``MujocoRolloutError`` when
-    the state becomes non-finite or MuJoCo reports a bad acceleration.
+    the state becomes non-finite or MuJoCo reports a bad position, velocity or acceleration.
     """
     mujoco = _import_mujoco()
     if not (np.isfinite(duration) and duration > 0):
@@ -160,16 +160,21 @@ def rollout(model: Model, reference, q0, duration: float, timestep: float = TIME
                          n_warnings=int(sum(w.number for w in d.warning)), wall_time=time.perf_counter() - start)
 
 
-DIVERGENCE_CHECK = 100  # [steps] how often a rollout checks its state for NaN or a bad acceleration
+DIVERGENCE_CHECK = 100  # [steps] how often a rollout checks its state for NaN or an unstable-simulation warning
 
 
 def _check_diverged(mujoco, d, qpos, k: int, timestep: float) -> None:
     """Raise ``MujocoRolloutError`` naming the first step that left a non-finite state in
-    ``qpos[:k + 2]``, or step k if MuJoCo reported a bad acceleration (it then resets the state)."""
+    ``qpos[:k + 2]``, or, when MuJoCo reported a bad position, velocity or acceleration (it then
+    resets the state and goes on), the check's step k by which it happened."""
     bad = np.flatnonzero(~np.isfinite(qpos[:k + 2]).all(axis=1))
-    if len(bad) or d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number:
-        j = int(bad[0]) - 1 if len(bad) else k
+    if len(bad):
+        j = int(bad[0]) - 1
         raise MujocoRolloutError(f"MuJoCo diverged at step {j}, t = {j * timestep:.4f} s (timestep {timestep:g} s)")
+    unstable = [name for name in ("BADQPOS", "BADQVEL", "BADQACC") if d.warning[getattr(mujoco.mjtWarning, f"mjWARN_{name}")].number]
+    if unstable:
+        raise MujocoRolloutError(f"MuJoCo diverged by step {k}, t = {k * timestep:.4f} s (timestep {timestep:g} s): "
+                                 f"it reported {', '.join(unstable)} and reset the state")
 
 
 def robot_com(model: Model, q) -> np.ndarray:
