@@ -239,3 +239,21 @@ def test_check_leaves_out_the_mujoco_claims_only_when_this_run_made_no_mujoco_co
     assert "its 2 committed claims are not compared" in capsys.readouterr().err
     assert check_report([wb, travel_C, travel_S], [wb, travel_C]) == 1
     assert "MJ-travel-S: committed, missing from the regenerated report" in capsys.readouterr().err
+
+
+def test_sidewinding_members_start_from_the_placement_their_nominal_run_recorded(tmp_path):
+    """The box-free placement run is made once per nominal run: its members wait for it, start
+    from the placement it recorded (direction, reach, gap), and come out exactly as a member that
+    made the placement run itself."""
+    from cobra_ref.reproduce import runs as runs_mod
+
+    nominal = RunSpec("sidewinding", duration=TINY)
+    member = RunSpec("sidewinding", duration=TINY, member=members("sidewinding", 2)[1])
+    runs_mod._placement.cache_clear()
+    got = run_all([nominal, member], str(tmp_path), executor=SerialExecutor(), progress=False)
+    info = runs_mod._placement.cache_info()
+    assert (info.misses, info.hits) == (1, 0)  # the member did not ask for the placement again
+    for key in ("box_direction", "box_reach", "box_gap"):
+        assert got[member].meta[key] == got[nominal].meta[key] is not None
+    alone, _ = runs_mod.simulate_spec(member)
+    assert np.array_equal(alone.q, got[member].q) and np.array_equal(alone.tau, got[member].tau)

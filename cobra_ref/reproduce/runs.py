@@ -45,7 +45,7 @@ from .. import __version__
 from ..gaits import gait, gait_params
 from ..executors import worker_init
 from ..params import CobraParameters
-from ..placement import travel_placement
+from ..placement import TravelPlacement, travel_placement
 from ..progress import progress_printer
 from ..robots import cobra_model
 from ..simulate import simulate
@@ -161,15 +161,17 @@ def _placement(gait_name: str, params_json: str, dt: float, mu_robot_box):
     return travel_placement(cobra_model(spec.cobra_parameters(), with_box=False), spec.reference(), dt)
 
 
-def simulate_spec(spec: RunSpec, progress=None) -> tuple[Trajectory, bool]:
+def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Trajectory, bool]:
     """Simulate ``spec`` from its placed and settled start, its member's perturbation applied;
     return (trajectory, failed): a run that fails mid-way returns what it computed, its error set.
 
     Helper: the simulation of ``run``, alone so that any executor can run it (nothing is written).
+    ``placement``: sidewinding's ``nominal_placement``, if it is known (computed here otherwise).
     """
     model = cobra_model(spec.cobra_parameters(), with_box=True)
     ref = spec.reference()
-    placement = nominal_placement(spec) if spec.gait == "sidewinding" else None
+    if spec.gait == "sidewinding" and placement is None:
+        placement = nominal_placement(spec)
     direction = None if placement is None else placement.direction
     member = spec.member
     q0, qd0 = initial_state(model, ref, box_direction=direction,
@@ -185,6 +187,7 @@ def simulate_spec(spec: RunSpec, progress=None) -> tuple[Trajectory, bool]:
     traj.meta.update({"gait": spec.gait, "gait_params": gait_params(ref), "cache_key": spec.key(),
                       "box_direction": None if direction is None else [float(x) for x in direction],
                       "box_gap": None if placement is None else placement.box_gap,
+                      "box_reach": None if placement is None else placement.reach,
                       "member": None if member is None else member.as_dict()})
     return traj, failed
 
@@ -213,10 +216,18 @@ def cached_path(spec: RunSpec, cache_dir: str) -> str | None:
     return None
 
 
-def _run_in_worker(spec: RunSpec, queue=None):
+def _run_in_worker(spec: RunSpec, queue=None, placement=None):
     """Executor entry: simulate one spec, reporting (label, done, total) to ``queue`` if given."""
     report = None if queue is None else (lambda done, total: queue.put((spec.label(), done, total)))
-    return simulate_spec(spec, report)
+    return simulate_spec(spec, report, placement)
+
+
+def _recorded_placement(traj: Trajectory):
+    """The ``TravelPlacement`` a sidewinding run was placed by, read back from its ``meta`` (None if absent)."""
+    m = traj.meta
+    if m.get("box_direction") is None or m.get("box_reach") is None:
+        return None
+    return TravelPlacement(tuple(m["box_direction"]), m["box_reach"], m["box_gap"])
 
 
 def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = None,
@@ -254,8 +265,14 @@ def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = No
 
 
 def _run_on(executor, todo, cache_dir: str, progress: bool, queue) -> None:
-    """Submit every spec of ``todo`` to ``executor``, store each result as it completes, report progress."""
-    futures = {executor.submit(_run_in_worker, s, queue): s for s in todo}
+    """Submit every spec of ``todo`` to ``executor``, store each result as it completes, report progress.
+
+    Sidewinding's members wait for their nominal run when it is in ``todo`` too, and start from
+    the placement it recorded: its box-free placement run is then made once, not in every worker.
+    """
+    nominal = {s for s in todo if s.member is None}
+    held = [s for s in todo if s.gait == "sidewinding" and replace(s, member=None) in nominal and s.member is not None]
+    futures = {executor.submit(_run_in_worker, s, queue): s for s in todo if s not in held}
     watcher = _Progress(todo, progress, queue)
     pending = set(futures)
     try:
@@ -263,8 +280,17 @@ def _run_on(executor, todo, cache_dir: str, progress: bool, queue) -> None:
             done, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
             for f in done:
                 spec = futures[f]
-                store(spec, cache_dir, *f.result())  # re-raises a run's exception here
+                traj, failed = f.result()  # re-raises a run's exception here
+                store(spec, cache_dir, traj, failed)
                 watcher.completed(spec)
+                # the members of a nominal run that has just recorded its placement go now
+                ready = [s for s in held if replace(s, member=None) == spec]
+                placement = _recorded_placement(traj)
+                for s in ready:
+                    held.remove(s)
+                    g = executor.submit(_run_in_worker, s, queue, placement)
+                    futures[g] = s
+                    pending.add(g)
             watcher.poll()
     except BaseException:
         for f in pending:
