@@ -238,10 +238,11 @@ def test_public_functions_name_what_they_implement():
         assert "Implements:" in doc or "Helper:" in doc, f"mujoco_check.{fname}"
 
 
-def test_a_rollout_that_blows_up_is_an_error_naming_when():
+def test_a_rollout_that_blows_up_is_an_error_naming_when(tmp_path, monkeypatch):
     """A start moving at 1e30 m/s is more than MuJoCo can integrate: it warns (BADQVEL) and resets
     the state to its start, and would go on as if nothing happened; the rollout raises instead,
     naming the step by which it happened, rather than return a reset trajectory."""
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes its warnings to MUJOCO_LOG.TXT in the working directory
     model = cobra_model()
     q0, qd0 = initial_state(model, gait("C"), StepSettings())
     with pytest.raises(mc.MujocoRolloutError, match=r"diverged by step \d+.*BADQVEL"):
