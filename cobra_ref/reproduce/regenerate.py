@@ -47,6 +47,7 @@ import time
 
 import numpy as np
 
+from ..executors import default_executor, shutdown
 from ..output import atomic_write, write_text
 from .runs import PAPER_GAITS, RunSpec, run_all
 
@@ -181,18 +182,20 @@ def reoptimize(directory: str, gaits=PAPER_GAITS, progress: bool = True) -> dict
     by side, one per core, each rolling out serially (no core waits for a batch's last rollout or a
     check), sidewinding's (the longest) first; progress lines carry the optimum's name.
     """
-    from concurrent.futures import ProcessPoolExecutor
-
-    from ..executors import worker_init
-
     os.makedirs(directory, exist_ok=True)
     jobs = [(g, g, None) for g in gaits] + [(f"direction-{name}", g, goal) for name, (g, goal) in DIRECTIONS.items()]
     jobs.sort(key=lambda job: job[1] != "sidewinding")  # stable: otherwise in the order above
     files = {name: os.path.join(directory, f"{name}.json") for name, _, _ in jobs}
-    with ProcessPoolExecutor(min(len(jobs), os.cpu_count() or 1), initializer=worker_init) as pool:
+    pool, interrupted = default_executor(min(len(jobs), os.cpu_count() or 1)), False
+    try:
         futures = [pool.submit(_optimize_one, name, g, goal, files[name], progress) for name, g, goal in jobs]
         for f in futures:
             f.result()  # re-raises an optimization's exception here
+    except BaseException:
+        interrupted = True
+        raise
+    finally:
+        shutdown(pool, interrupted)
     return files
 
 
@@ -237,25 +240,18 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
     _say(progress, f"simulating {len(specs)} gaits x {n_members} member(s): member 0 {every[0].duration:g} s, "
                    f"the others {T:g} s (cache: {cache_dir})")
     runs = run_all(every, cache_dir, force=force, workers=workers, progress=progress, executor=executor)
-    # the MuJoCo comparison and the optima's replays run in a pool while this process draws the figures
-    side = _side_pool(executor)
+    # the MuJoCo comparison and the optima's replays run on the executor (default: a process pool)
+    # while this process draws the figures
+    side, interrupted = executor or default_executor(), False
     try:
         return _finish(specs, every, runs, T, files_opt, params, out_dir, cache_dir, optimized_dir, gaits, n_members,
                        quick, mujoco, force, progress, side, start)
+    except BaseException:
+        interrupted = True
+        raise
     finally:
         if executor is None:
-            side.shutdown()
-
-
-def _side_pool(executor):
-    """The executor of the work that follows the runs (``executor`` if given, else a process pool on the cores)."""
-    if executor is not None:
-        return executor
-    from concurrent.futures import ProcessPoolExecutor
-
-    from ..executors import worker_init
-
-    return ProcessPoolExecutor(os.cpu_count() or 1, initializer=worker_init)
+            shutdown(side, interrupted)
 
 
 def _finish(specs, every, runs, T, files_opt, params, out_dir, cache_dir, optimized_dir, gaits, n_members, quick,
@@ -420,8 +416,8 @@ def _mujoco_key(boxed: dict, runs: dict, duration: float) -> str:
 
 
 def _mujoco_compute(executor, boxed: dict, runs: dict, duration: float) -> list:
-    """Futures of the box-ensemble rows and the travel rows, one task per gait and kind on ``executor``
-    (each a list of rows), the box rows first (the longest)."""
+    """Futures of the travel rows and the box-ensemble rows, one task per gait and kind on ``executor``
+    (each a list of rows); the box rows, the longest, are submitted first."""
     from .mujoco_check import box_ensemble_rows, robot_travel_rows
 
     ensembles = {}
@@ -462,8 +458,8 @@ def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, p
                           replays=None) -> list[str]:
     """``fig_optimization`` (one optimum per gait) and ``fig_directions`` (``DIRECTIONS``) from the
     params JSONs in ``directory``; each optimum is replayed once and its box path cached.
-    ``replays``: futures of replays already started (``_replays_submit``); default: replayed here,
-    in parallel."""
+    ``replays``: futures of replays already started (``_replays_submit``); an optimum whose replay
+    is not cached is replayed here."""
     from .figures.fig_optimization import make
     from ..planning.results import load_result
 
@@ -476,17 +472,6 @@ def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, p
         return out
 
     t0 = time.perf_counter()
-    if replays is None:
-        paths = _optimum_paths(directory, gaits)
-        if len(paths) > 1:
-            from concurrent.futures import ProcessPoolExecutor
-
-            from ..executors import worker_init
-
-            with ProcessPoolExecutor(min(len(paths), os.cpu_count() or 1), initializer=worker_init) as pool:
-                replays = _replays_submit(pool, directory, gaits, cache_dir)
-                for f in replays:
-                    f.result()
     for f in replays or []:
         f.result()  # re-raises a replay's exception here
     per_gait = runs([(g, g, os.path.join(directory, f"{g}.json")) for g in gaits])

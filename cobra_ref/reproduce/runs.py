@@ -271,7 +271,7 @@ def _run_on(executor, todo, cache_dir: str, progress: bool, queue) -> None:
     the placement it recorded: its box-free placement run is then made once, not in every worker.
     """
     nominal = {s for s in todo if s.member is None}
-    held = [s for s in todo if s.gait == "sidewinding" and replace(s, member=None) in nominal and s.member is not None]
+    held = [s for s in todo if s.gait == "sidewinding" and s.member is not None and replace(s, member=None) in nominal]
     futures = {executor.submit(_run_in_worker, s, queue): s for s in todo if s not in held}
     watcher = _Progress(todo, progress, queue)
     pending = set(futures)
@@ -285,12 +285,13 @@ def _run_on(executor, todo, cache_dir: str, progress: bool, queue) -> None:
                 watcher.completed(spec)
                 # the members of a nominal run that has just recorded its placement go now
                 ready = [s for s in held if replace(s, member=None) == spec]
-                placement = _recorded_placement(traj)
-                for s in ready:
-                    held.remove(s)
-                    g = executor.submit(_run_in_worker, s, queue, placement)
-                    futures[g] = s
-                    pending.add(g)
+                if ready:
+                    placement = _recorded_placement(traj)
+                    held = [s for s in held if s not in ready]
+                    for s in ready:
+                        started = executor.submit(_run_in_worker, s, queue, placement)
+                        futures[started] = s
+                        pending.add(started)
             watcher.poll()
     except BaseException:
         for f in pending:
