@@ -289,6 +289,8 @@ RULES = {
     # gait parameters given on the command line (the gait checks each one's own range)
     "study_duration": Rule("duration", "s", 0.0, 20.0, low_open=True,
                            why="each of the study's runs; the finest dt (0.25 ms) takes 4000 steps per second"),
+    "restart": Rule("restart", "s", 0.0, 20.0, why="the time at which every run of the study starts from one "
+                                                     "state; below the study's duration"),
     "scenario_duration": Rule("duration", "s", 0.0, 60.0, low_open=True, why="each scenario of the sweep"),
     "count": Rule("count", "-", 1, 100_000, kind="int"),
     "members": Rule("members", "-", 1, 256, kind="int",

@@ -89,3 +89,56 @@ def test_the_command_refuses_an_unknown_setting(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["convergence", "--settings", "soft", "--quiet"])
     assert "--settings" in str(exc.value) and "soft" in str(exc.value)
+
+
+def test_a_run_restarted_from_its_own_state_at_T_continues_it(cobra):
+    # the restart of the study: the state at T and the reference shifted by T give the same
+    # run from T on as the uninterrupted one (the fixed point's warm start is the only thing lost)
+    from cobra_ref.gaits import gait
+    from cobra_ref.simulate import simulate
+    from cobra_ref.start import initial_state
+    from cobra_ref.step import StepSettings
+
+    ref, s = gait("C"), StepSettings(dt=1e-3)
+    whole = simulate(cobra, ref, 0.03, s, *initial_state(cobra, ref, s))
+    k = 10  # T = 0.01 s
+    tail = simulate(cobra, cv.Shifted(ref, 0.01), 0.02, s, whole.q[k], whole.qd[k])
+    np.testing.assert_allclose(cv.Shifted(ref, 0.01)(0.005)[0], ref(0.015)[0])
+    np.testing.assert_allclose(tail.q, whole.q[k:], atol=1e-9)
+    np.testing.assert_allclose(tail.tau, whole.tau[k:], atol=1e-6)
+
+
+def test_a_restarted_study_starts_every_dt_from_the_finest_state(monkeypatch):
+    # the finest dt runs to T once; every dt then starts from its last state, on the reference
+    # shifted by T, for duration - T
+    calls, simulate = [], cv.simulate
+
+    def recording(model, reference, duration, settings, q0, qd0):
+        traj = simulate(model, reference, duration, settings, q0, qd0)
+        calls.append((reference, duration, settings.dt, q0.copy(), traj.q[-1].copy()))
+        return traj
+
+    monkeypatch.setattr(cv, "simulate", recording)
+    result = cv.study("C", duration=0.03, dts=(1e-3, 5e-4), settings=("high-fidelity",), restart=0.01)
+    (_, T, dt_head, _, q_T), *runs = calls
+    assert (T, dt_head) == (0.01, 5e-4)
+    assert [dt for _, _, dt, _, _ in runs] == [1e-3, 5e-4]
+    for reference, duration, _, q0, _ in runs:
+        assert isinstance(reference, cv.Shifted) and reference.t0 == 0.01
+        assert duration == pytest.approx(0.02)
+        np.testing.assert_array_equal(q0, q_T)
+    rows = result["high-fidelity"]
+    assert all(r["fixed_point_converged"] == 1.0 for r in rows.values())
+    assert "from the dt = 0.5 ms state at t = 0.01 s" in cv.format_table(result, "C", 0.01)
+
+
+@pytest.mark.parametrize("restart", [-0.001, 0.03, 0.05, 0.0101])
+def test_a_restart_outside_the_run_or_between_steps_is_refused(restart):
+    with pytest.raises(ValueError, match="restart must be in"):
+        cv.check_restart(restart, 0.03, cv.DTS)
+
+
+def test_the_command_refuses_a_restart_past_the_duration():
+    with pytest.raises(SystemExit) as exc:
+        main(["convergence", "--gait", "C", "--duration", "0.01", "--restart", "0.02", "--quiet"])
+    assert "restart" in str(exc.value) and "0.02" in str(exc.value)

@@ -17,7 +17,7 @@ def cmd_convergence(args) -> int:
 
     Helper: the command line (cobra-ref convergence).
     """
-    from ..reproduce.convergence import SETTINGS, changes, format_table, study
+    from ..reproduce.convergence import DTS, SETTINGS, changes, check_restart, format_table, study
 
     if args.json is not None:
         check_out(args.json, "--json")
@@ -25,14 +25,15 @@ def cmd_convergence(args) -> int:
     try:
         for name in settings:
             check_choice("--settings", name, SETTINGS)
+        check_restart(args.restart, args.duration, DTS)
     except ValidationError as exc:
         raise fail(exc) from None
     say = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
     with c_stdout_silenced():
-        result = study(args.gait, args.duration, settings=settings, progress=say)
-    print(format_table(result, args.gait))
+        result = study(args.gait, args.duration, settings=settings, progress=say, restart=args.restart)
+    print(format_table(result, args.gait, args.restart))
     if args.json is not None:
-        record = {"gait": args.gait, "duration": args.duration,
+        record = {"gait": args.gait, "duration": args.duration, "restart": args.restart,
                   "results": {name: {str(dt): row for dt, row in rows.items()} for name, rows in result.items()},
                   "changes": {name: changes(rows) for name, rows in result.items()}}
         write_text_atomic(args.json, json.dumps(record, indent=1) + "\n", "--json")
@@ -58,6 +59,10 @@ def add_parsers(sub) -> None:
                    help="simulated time per run [s] (default 2)")
     p.add_argument("--settings", default="high-fidelity,rigid", help="comma separated: high-fidelity, rigid "
                                                                       "(default both)")
+    p.add_argument("--restart", type=RULES["restart"].arg("--restart"), default=0.0, metavar="T",
+                   help="start every dt at T [s] from the state the finest dt reached there, so that the table "
+                        "measures the steps after T apart from the error carried to T (default 0: every run from "
+                        "the start; T must be a whole number of 0.25 ms steps, below --duration)")
     p.add_argument("--json", metavar="FILE", help="also write the table as JSON (exactly this name)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_convergence)

@@ -16,6 +16,12 @@ each setting (contact law and servo), ``study`` simulates ``duration`` seconds a
 An impulsive model shows itself here: its peaks grow like 1 / dt (a velocity jump takes one
 step whatever its length), a non-impulsive one's converge. ``changes`` reports each metric's
 relative change between successive dt.
+
+``restart`` = T > 0 separates what the steps after T do from the error carried to T: every dt
+starts at T from the one state the finest dt reached there (local convergence, against the
+global convergence of runs that each start at t = 0), and the metrics cover T .. ``duration``.
+A quantity that converges from a common state but not from t = 0 is sensitive to the error
+accumulated before T, not resolved differently after it.
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ from ..robots import cobra_model
 from ..simulate import simulate
 from ..start import initial_state
 from ..step import StepSettings
+from ..validation import ValidationError
 
 DTS = (2e-3, 1e-3, 5e-4, 2.5e-4)
 WINDOW = 2e-3  # [s] the moving mean of forces, torques and power
@@ -84,11 +91,39 @@ def metrics(traj, model) -> dict:
             "fixed_point_converged": float(np.mean(traj.steps["fp_converged"]))}
 
 
-def study(gait_name: str = "J", duration: float = 2.0, dts=DTS, settings=tuple(SETTINGS), progress=None) -> dict:
-    """{setting: {dt: metrics}} of one gait (module docstring).
+class Shifted:
+    """The joint reference of a run that starts at time ``t0`` of the gait: ``Shifted(ref, t0)(t) = ref(t0 + t)``.
+
+    Helper: the runs of a study restarted at T (``study``).
+    """
+
+    def __init__(self, reference, t0: float):
+        self.reference, self.t0 = reference, t0
+
+    def __call__(self, t: float):
+        return self.reference(self.t0 + t)
+
+
+def check_restart(restart: float, duration: float, dts) -> None:
+    """A ``ValidationError`` unless 0 <= restart < duration and restart is a whole number of steps
+    of the finest dt (the state every run starts from is the finest run's at that step).
+
+    Helper: ``study``'s and ``cobra-ref convergence --restart``'s check.
+    """
+    n = restart / min(dts)
+    if not 0.0 <= restart < duration or abs(n - round(n)) > 1e-9 * max(n, 1.0):
+        raise ValidationError(f"restart must be in [0, duration = {duration:g}) s and a whole number of "
+                              f"dt = {min(dts) * 1e3:g} ms steps; got restart = {restart:g} s")
+
+
+def study(gait_name: str = "J", duration: float = 2.0, dts=DTS, settings=tuple(SETTINGS), progress=None,
+          restart: float = 0.0) -> dict:
+    """{setting: {dt: metrics}} of one gait (module docstring); ``restart`` = T > 0: every dt runs
+    from T to ``duration``, starting from the state the finest dt reached at T.
 
     Helper: ``cobra-ref convergence``.
     """
+    check_restart(restart, duration, dts)
     model, ref = cobra_model(), gait(gait_name)
     # the box where the figures put it: a travelling gait's ahead of its wave (placed once, at 1 ms)
     where = {}
@@ -99,11 +134,19 @@ def study(gait_name: str = "J", duration: float = 2.0, dts=DTS, settings=tuple(S
     for name in settings:
         contact, servo = SETTINGS[name]
         out[name] = {}
+        common = None  # restart: the finest dt's state at T, where every dt starts
+        if restart > 0:
+            finest = StepSettings(dt=min(dts), contact=contact, servo=servo)
+            head = simulate(model, ref, restart, finest, *initial_state(model, ref, finest, **where))
+            common = (head.q[-1], head.qd[-1])
         for dt in dts:
             start = time.perf_counter()
             step_settings = StepSettings(dt=dt, contact=contact, servo=servo)
-            q0, qd0 = initial_state(model, ref, step_settings, **where)
-            traj = simulate(model, ref, duration, step_settings, q0, qd0)
+            if common is None:
+                q0, qd0 = initial_state(model, ref, step_settings, **where)
+                traj = simulate(model, ref, duration, step_settings, q0, qd0)
+            else:
+                traj = simulate(model, Shifted(ref, restart), duration - restart, step_settings, *common)
             out[name][dt] = {**metrics(traj, model), "seconds": time.perf_counter() - start}
             if progress:
                 progress(f"{gait_name} {name} dt = {dt * 1e3:g} ms: {time.perf_counter() - start:.0f} s")
@@ -121,7 +164,7 @@ def changes(rows: dict) -> dict:
             for k in keys}
 
 
-def format_table(result: dict, gait_name: str) -> str:
+def format_table(result: dict, gait_name: str, restart: float = 0.0) -> str:
     """The study as a text table: one block per setting, one column per dt.
 
     Helper: what ``cobra-ref convergence`` prints.
@@ -129,7 +172,8 @@ def format_table(result: dict, gait_name: str) -> str:
     lines = []
     for name, rows in result.items():
         dts = sorted(rows, reverse=True)
-        lines.append(f"{gait_name}, {name} ({' + '.join(SETTINGS[name])})")
+        since = f", every dt from the dt = {min(dts) * 1e3:g} ms state at t = {restart:g} s" if restart > 0 else ""
+        lines.append(f"{gait_name}, {name} ({' + '.join(SETTINGS[name])}){since}")
         lines.append(f"  {'dt [ms]':<24}" + "".join(f"{dt * 1e3:>10g}" for dt in dts))
         for key in rows[dts[0]]:
             if key != "seconds":
