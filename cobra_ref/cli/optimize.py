@@ -44,8 +44,9 @@ def add_parsers(sub) -> None:
         "optimize", help="single shooting: gait parameters that push the box to a goal with least torque",
         description="Single shooting ([COBRA] 'shooting method to find optimal u_ref'): optimise a gait's "
                     "parameters so that a rollout of DURATION seconds pushes the box to the goal with the least "
-                    "joint torque (cost = mean squared torque / tau_max^2 + 10 (distance to goal / start "
-                    "distance)^2 + torque and joint-limit penalties; see cobra_ref/planning/). One progress "
+                    "joint torque and the fewest impacts (cost = mean squared torque / tau_max^2 + 10 (distance "
+                    "to goal / start distance)^2 + 10 impact impulse / (robot weight x DURATION) + torque and "
+                    "joint-limit penalties; see cobra_ref/planning/). One progress "
                     "line per iteration and a summary on stderr, one JSON line on stdout; OUT holds the optimum "
                     "('params'), every rollout ('history') and every setting; 'cobra-ref simulate --params OUT' "
                     "replays it. Ctrl-C stops and writes the best rollout so far (with \"interrupted\": true).")
