@@ -527,3 +527,16 @@ def test_a_child_process_renders_the_same_animation(results, cobra, tmp_path, mo
             b.seek(i)
             diff = np.abs(np.asarray(a.convert("RGB"), int) - np.asarray(b.convert("RGB"), int))
             assert np.mean(diff > 8) < 1e-3, f"frame {i} differs"
+
+
+@pytest.mark.parametrize("gaits", [PAPER_GAITS, ("J",)], ids=["five gaits", "one gait"])
+def test_nothing_is_cut_at_the_figures_edge(gaits, results, ensemble, cobra, tmp_path):
+    """Every paper figure, drawn for the five gaits with their ensembles and for one gait alone, has
+    no ink on its outermost two pixels: a title, label or legend cut by the page's edge would leave
+    some there (a legend wider than the page, for instance)."""
+    paths = make_all({g: results[g] for g in gaits}, str(tmp_path), cobra, animations=False,
+                     ensemble={g: ensemble[g] for g in gaits})
+    for path in [p for p in paths if p.endswith(".png")]:
+        grey = np.asarray(Image.open(path).convert("L"))
+        border = np.concatenate([grey[:2].ravel(), grey[-2:].ravel(), grey[:, :2].ravel(), grey[:, -2:].ravel()])
+        assert (border < 200).sum() == 0, f"{os.path.basename(path)}: {(border < 200).sum()} dark pixels on the edge"

@@ -210,6 +210,36 @@ def test_the_figure_draws_both_comparisons_in_words_not_dicts(tmp_path, monkeypa
     assert not printed, printed
 
 
+def test_the_figures_panels_stay_inside_it_and_apart(tmp_path, monkeypatch):
+    """With all five gaits, every panel with its title, labels and numbers (its tight box) lies within
+    the figure and clear of every other panel's (one pixel of slack at the figure's 150 dpi)."""
+    from cobra_ref.reproduce.figures import fig_mujoco_check as fig_module
+
+    drawn, original = {}, fig_module.save
+
+    def capture(fig, out_dir, stem):
+        drawn["fig"] = fig
+        return original(fig, out_dir, stem)
+
+    monkeypatch.setattr(fig_module, "save", capture)
+    travel, box = _rows()
+    gaits = ("C", "S", "J", "J-mirror", "sidewinding")
+    rows = [{**travel, "gait": g} for g in gaits] + [{**box, "gait": g} for g in gaits]
+    fig_module.make(rows, str(tmp_path))
+    fig = drawn["fig"]
+    assert len(fig.axes) == 6
+    renderer = fig.canvas.get_renderer()
+    boxes = [ax.get_tightbbox(renderer) for ax in fig.axes]
+    page = fig.bbox
+    for b in boxes:
+        assert page.x0 - 1 <= b.x0 and b.x1 <= page.x1 + 1 and page.y0 - 1 <= b.y0 and b.y1 <= page.y1 + 1
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1:]:
+            overlap_x = min(a.x1, b.x1) - max(a.x0, b.x0)
+            overlap_y = min(a.y1, b.y1) - max(a.y0, b.y0)
+            assert min(overlap_x, overlap_y) <= 1.0, (a, b)
+
+
 def test_missing_mujoco_raises_a_clear_error(cobra, monkeypatch):
     """mujoco is optional: without it every entry point says what to install, and available() is False."""
     monkeypatch.setitem(sys.modules, "mujoco", None)  # makes `import mujoco` raise ImportError

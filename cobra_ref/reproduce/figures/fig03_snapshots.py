@@ -220,7 +220,9 @@ def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> li
     is accepted for a common signature and not drawn: the nominal runs only.
     """
     rows = common.ordered(results)
-    fig = common.new_figure(common.TWO_COLUMN, 1.55 * max(len(rows), 1) + 0.3)
+    # 0.5 in beyond the rows: the title, and the last row's axis labels, which the layout does not
+    # see on 3-D axes
+    fig = common.new_figure(common.TWO_COLUMN, 1.55 * max(len(rows), 1) + 0.5)
     if not rows:
         common.empty_panel(fig.add_subplot(), "no gait to show")
         return common.save(fig, out_dir, "fig03_snapshots")

@@ -87,8 +87,8 @@ def plot_slopes(ax, rows, slopes: dict, ensemble: dict) -> None:
     ax.grid(False, axis="x")
     T = max((traj.duration for _, traj in rows), default=0.0)
     ax.legend(handles=[Line2D([], [], marker="D", ls="none", ms=3.5, color="0.4", label=f"nominal run ({T:g} s)")]
-              + common.spread_handles(n_members, common.ensemble_window(ensemble)), loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3,
-              fontsize=5.5)
+              + common.spread_handles(n_members, common.ensemble_window(ensemble)), loc="lower center", bbox_to_anchor=(0.5, 1.0),
+              ncol=1, fontsize=5.5)  # one column: three side by side are wider than the figure
 
 
 @common.paper_style
@@ -102,7 +102,7 @@ def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> li
     """
     rows = common.ordered(results)
     spread = bool(rows) and any(len(common.ensemble_values(ensemble, g, "efficiency_slope")) for g, _ in rows)
-    fig = common.new_figure(common.ONE_COLUMN, 4.8 if spread else 3.3)
+    fig = common.new_figure(common.ONE_COLUMN, 5.2 if spread else 3.3)
     axes = fig.subplots(2, 1, height_ratios=[2.0, 1.0]) if spread else [fig.add_subplot()]
     if not rows:
         common.empty_panel(axes[0], "no gait to show")

@@ -4,18 +4,20 @@ Helper: the figure of ``reproduce.mujoco_check``. Top: for each gait, the travel
 centre of mass (no box) in cobra_ref and in MuJoCo, as bars of its length with the relative
 difference |d_MuJoCo - d_ours| / |d_ours| and the verdict against the 10 % band written above
 them. Bottom: one panel per gait of the box ensembles, each member's box displacement as a dot
-(cobra_ref and MuJoCo), with the length and direction ranges of the overlap rule and its
-verdict. The rules are stated in words under the panels.
+(cobra_ref and MuJoCo), three panels to a row, with the length and direction ranges of the
+overlap rule and its verdict. The rules are stated in words above the panels.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.patches import Wedge
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch, Wedge
 
 from .common import TWO_COLUMN, new_figure, ordered, paper_style, save
 
 STEM = "fig_mujoco_check"
+BOX_COLUMNS = 3  # box panels per row
 OURS, MUJOCO = "tab:blue", "tab:orange"
 
 
@@ -28,16 +30,22 @@ def make(rows: list[dict], out_dir: str) -> list[str]:
     """
     travel = [r for r in rows if r["kind"] == "travel"]
     boxes = dict(ordered({r["gait"]: r for r in rows if r["kind"] == "box"}))
-    n_box = len(boxes)
-    fig = new_figure(TWO_COLUMN, 2.3 + (2.0 if n_box else 0.0))
-    grid = fig.add_gridspec(2 if n_box else 1, max(n_box, 1), height_ratios=[1.0, 1.1] if n_box else [1.0])
+    # the box panels three to a row, under the travel panel that spans the width
+    n_cols = min(len(boxes), BOX_COLUMNS) or 1
+    n_rows = -(-len(boxes) // BOX_COLUMNS)
+    fig = new_figure(TWO_COLUMN, (2.3 if travel else 0.0) + 2.3 * n_rows + 0.3)
+    heights = ([1.0] if travel else []) + [1.0] * n_rows
+    grid = fig.add_gridspec(len(heights), n_cols, height_ratios=heights or [1.0])
     if travel:
         _travel_panel(fig.add_subplot(grid[0, :]), travel)
+    first = 1 if travel else 0
     for k, row in enumerate(boxes.values()):
-        ax = fig.add_subplot(grid[1 if travel else 0, k])
-        _box_panel(ax, row)
-        if k == 0:
-            ax.legend(loc="upper left", fontsize=5.5)
+        _box_panel(fig.add_subplot(grid[first + k // n_cols, k % n_cols]), row)
+    if boxes:  # one key for the box panels, under them
+        fig.legend(handles=[Line2D([], [], marker="o", ls="none", ms=3, color=OURS, label="cobra_ref member"),
+                            Line2D([], [], marker="x", ls="none", ms=4, color=MUJOCO, label="MuJoCo member"),
+                            Patch(color="0.5", alpha=0.3, lw=0, label="range of length x direction (overlap rule)")],
+                   loc="outside lower center", ncol=3, fontsize=6)
     fig.suptitle(_caption(travel, list(boxes.values())), fontsize=6.5)
     return save(fig, out_dir, STEM)
 
@@ -82,8 +90,8 @@ def _box_panel(ax, row: dict) -> None:
                                             (row["mujoco_length"], row["mujoco_direction_deg"], MUJOCO)):
         ax.add_patch(Wedge((0, 0), 1e3 * hi, centre - half, centre + half, width=1e3 * (hi - lo), color=color,
                            alpha=0.15, lw=0))
-    ax.plot(*(1e3 * d_o.T), "o", color=OURS, ms=3, label="cobra_ref")
-    ax.plot(*(1e3 * d_m.T), "x", color=MUJOCO, ms=4, label="MuJoCo")
+    ax.plot(*(1e3 * d_o.T), "o", color=OURS, ms=3)
+    ax.plot(*(1e3 * d_m.T), "x", color=MUJOCO, ms=4)
     # a square window around every end point, 3 resolutions wide at least
     ends = 1e3 * np.vstack([d_o, d_m])
     centre, half = (ends.max(axis=0) + ends.min(axis=0)) / 2, max(np.ptp(ends, axis=0).max() / 2, 0.0)
@@ -93,15 +101,15 @@ def _box_panel(ax, row: dict) -> None:
     ax.set_aspect("equal")
     ax.set_xlabel("box dx from its start [mm]")
     ax.set_ylabel("box dy [mm]")
-    ax.text(0.98, 0.03, "\n".join(_ranges(row)), transform=ax.transAxes, ha="right", va="bottom", fontsize=5.5)
+    ax.text(0.98, 0.03, "\n".join(_ranges(row)), transform=ax.transAxes, ha="right", va="bottom", fontsize=6)
     verdict = {True: "overlap", False: "DO NOT overlap", None: "box barely moves, not tested"}[row["holds"]]
-    ax.set_title(f"{row['gait']}: {row['n_members']} members, {verdict}", fontsize=7)
+    ax.set_title(f"{row['gait']}, {row['n_members']} members: {verdict}", fontsize=7)
 
 
 def _ranges(row: dict) -> list[str]:
-    """One line per simulator: its length interval [mm] and arc of directions [deg]."""
+    """One line per simulator: its length interval [mm] and arc of directions (centre +- half) [deg]."""
     lines = []
-    for who, key in (("cobra_ref", "ours"), ("MuJoCo", "mujoco")):
+    for who, key in (("ours", "ours"), ("MuJoCo", "mujoco")):
         (lo, hi), (centre, half) = row[f"{key}_length"], row[f"{key}_direction_deg"]
-        lines.append(f"{who}: {1e3 * lo:.0f}-{1e3 * hi:.0f} mm, {centre:.0f} +- {half:.0f} deg")
+        lines.append(f"{who} {1e3 * lo:.0f}-{1e3 * hi:.0f} mm, {centre:.0f}\u00b1{half:.0f}\u00b0")
     return lines
