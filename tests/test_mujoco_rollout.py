@@ -277,3 +277,22 @@ def test_a_rollout_that_blows_up_is_an_error_naming_when(tmp_path, monkeypatch):
     q0, qd0 = initial_state(model, gait("C"), StepSettings())
     with pytest.raises(mc.MujocoRolloutError, match=r"diverged by step \d+.*BADQVEL"):
         mc.rollout(model, gait("C"), q0, 0.05, qd0=np.full(model.nv, 1e30))
+
+
+@pytest.mark.parametrize("which", ["travel", "box", "none"])
+def test_the_figure_draws_whichever_comparison_there_is(which, tmp_path, monkeypatch):
+    """Only the travel rows, only the box rows, or none (MuJoCo ran nothing): a figure all the same,
+    with one panel per row (the travel rows share one)."""
+    from cobra_ref.reproduce.figures import fig_mujoco_check as fig_module
+
+    drawn, original = {}, fig_module.save
+
+    def capture(fig, out_dir, stem):
+        drawn["fig"] = fig
+        return original(fig, out_dir, stem)
+
+    monkeypatch.setattr(fig_module, "save", capture)
+    rows = [r for r in _rows() if r["kind"] == which]
+    paths = fig_module.make(rows, str(tmp_path))
+    assert sorted(p.rsplit(".", 1)[1] for p in paths) == ["pdf", "png"]
+    assert len(drawn["fig"].axes) == len(rows)

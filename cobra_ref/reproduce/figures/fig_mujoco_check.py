@@ -33,9 +33,9 @@ def make(rows: list[dict], out_dir: str) -> list[str]:
     # the box panels three to a row, under the travel panel that spans the width
     n_cols = min(len(boxes), BOX_COLUMNS) or 1
     n_rows = -(-len(boxes) // BOX_COLUMNS)
-    fig = new_figure(TWO_COLUMN, (2.3 if travel else 0.0) + 2.3 * n_rows + 0.3)
-    heights = ([1.0] if travel else []) + [1.0] * n_rows
-    grid = fig.add_gridspec(len(heights), n_cols, height_ratios=heights or [1.0])
+    heights = ([1.0] if travel else []) + [1.0] * n_rows or [1.0]  # one empty row when there is nothing
+    fig = new_figure(TWO_COLUMN, 2.3 * len(heights) + 0.3)
+    grid = fig.add_gridspec(len(heights), n_cols, height_ratios=heights)
     if travel:
         _travel_panel(fig.add_subplot(grid[0, :]), travel)
     first = 1 if travel else 0
