@@ -119,6 +119,22 @@ def default_executor(workers: int | None = None) -> ProcessPoolExecutor:
     return ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1, initializer=worker_init)
 
 
+@contextmanager
+def own_pool(workers: int | None = None):
+    """``default_executor(workers)`` for a ``with`` block, shut down on leaving it: waiting for its
+    work after a normal exit, its workers ended at once after an exception (Ctrl-C included).
+
+    Helper: a pool that is made and ended in one place (``shutdown``).
+    """
+    executor = default_executor(workers)
+    try:
+        yield executor
+    except BaseException:
+        shutdown(executor, interrupted=True)
+        raise
+    shutdown(executor, interrupted=False)
+
+
 def shutdown(executor: Executor, interrupted: bool) -> None:
     """Shut down our own pool; after Ctrl-C, end its worker processes (they ignore SIGINT) at once.
 

@@ -257,3 +257,27 @@ def test_sidewinding_members_start_from_the_placement_their_nominal_run_recorded
         assert got[member].meta[key] == got[nominal].meta[key] is not None
     alone, _ = runs_mod.simulate_spec(member)
     assert np.array_equal(alone.q, got[member].q) and np.array_equal(alone.tau, got[member].tau)
+
+
+def test_own_pool_waits_for_its_work_or_ends_its_workers_after_an_exception():
+    """On a normal exit the pool has finished what it was given and takes nothing more; when the block
+    raises (as Ctrl-C does), the exception goes on and the worker processes are ended, not waited for."""
+    import time
+
+    from cobra_ref.executors import own_pool
+
+    with own_pool(1) as pool:
+        future = pool.submit(abs, -3)
+    assert future.result() == 3
+    with pytest.raises(RuntimeError):
+        pool.submit(abs, -1)
+    start = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        with own_pool(1) as pool:
+            pool.submit(time.sleep, 30)
+            workers = list(pool._processes.values())
+            raise KeyboardInterrupt
+    assert time.perf_counter() - start < 10  # the 30 s task was not waited for
+    for process in workers:
+        process.join(5)
+        assert not process.is_alive()

@@ -44,10 +44,11 @@ import json
 import os
 import sys
 import time
+from contextlib import nullcontext
 
 import numpy as np
 
-from ..executors import default_executor, shutdown
+from ..executors import SerialExecutor, own_pool
 from ..output import atomic_write, write_text
 from .runs import PAPER_GAITS, RunSpec, run_all
 
@@ -186,22 +187,15 @@ def reoptimize(directory: str, gaits=PAPER_GAITS, progress: bool = True) -> dict
     jobs = [(g, g, None) for g in gaits] + [(f"direction-{name}", g, goal) for name, (g, goal) in DIRECTIONS.items()]
     jobs.sort(key=lambda job: job[1] != "sidewinding")  # stable: otherwise in the order above
     files = {name: os.path.join(directory, f"{name}.json") for name, _, _ in jobs}
-    pool, interrupted = default_executor(min(len(jobs), os.cpu_count() or 1)), False
-    try:
+    with own_pool(min(len(jobs), os.cpu_count() or 1)) as pool:
         futures = [pool.submit(_optimize_one, name, g, goal, files[name], progress) for name, g, goal in jobs]
         for f in futures:
             f.result()  # re-raises an optimization's exception here
-    except BaseException:
-        interrupted = True
-        raise
-    finally:
-        shutdown(pool, interrupted)
     return files
 
 
 def _optimize_one(name: str, g: str, goal, out: str, progress: bool) -> None:
     """One optimization of ``reoptimize`` (in a worker), its rollouts in this process."""
-    from ..executors import SerialExecutor
     from ..planning.search import optimize_gait
 
     say = (lambda line: _say(True, f"    {name}: {line}")) if progress else (lambda line: None)
@@ -242,16 +236,9 @@ def regenerate(out_dir: str = "figures", quick: bool = False, force: bool = Fals
     runs = run_all(every, cache_dir, force=force, workers=workers, progress=progress, executor=executor)
     # the MuJoCo comparison and the optima's replays run on the executor (default: a process pool)
     # while this process draws the figures
-    side, interrupted = executor or default_executor(), False
-    try:
+    with nullcontext(executor) if executor is not None else own_pool() as side:
         return _finish(specs, every, runs, T, files_opt, params, out_dir, cache_dir, optimized_dir, gaits, n_members,
                        quick, mujoco, force, progress, side, start)
-    except BaseException:
-        interrupted = True
-        raise
-    finally:
-        if executor is None:
-            shutdown(side, interrupted)
 
 
 def _finish(specs, every, runs, T, files_opt, params, out_dir, cache_dir, optimized_dir, gaits, n_members, quick,
