@@ -2,29 +2,43 @@
 
 Implements: the laws of the paper's "high-fidelity" model ([COBRA] sec. "Simulation Setup"):
 spring-damper normal contact, smooth stick-slip friction and position-controlled joints whose
-torque is bounded by tau_max, each written implicitly over one step as a *compliance* R >= 0
-and an *offset* b of one row of the least-action problem of eq. (6)::
+torque is bounded by tau_max, each written over one step, in the velocity after it, as a
+*compliance* R >= 0 and an *offset* b of one row of the least-action problem of eq. (6)::
 
     min_x 1/2 x^T (G + R) x + x^T (J qd_free + b)        (x: impulses of the rows)
 
 Its optimality condition on an unconstrained row is w + R x + b = 0, with w = J qd+ the row's
-velocity after the step. That is the implicit law of a spring-damper acting on the row's
-coordinate e (the gap, or a joint's error from its reference) with a target rate v_ref::
+velocity after the step. That is the law of a spring-damper acting on the row's coordinate e
+(the gap, or a joint's error from its reference) with a target rate v_ref, the damper on the
+velocity after the step and the spring at the point e + theta dt w of the step::
 
-    f = -k e(t+dt) - d (w - v_ref),    e(t+dt) = e + dt w,    x = f dt
-    =>  w + R x + b = 0,   R = 1 / (dt (k dt + d)),   b = (k e - d v_ref) / (k dt + d)
+    f = -k (e + theta dt w) - d (w - v_ref),    x = f dt
+    =>  w + R x + b = 0,   R = 1 / (dt (theta k dt + d)),   b = (k e - d v_ref) / (theta k dt + d)
 
-(``spring_damper``). Stiff limits: k, d -> infinity with d / k -> 0 gives R -> 0 and
-b -> e / dt: the row is then rigid, its coordinate reaches e = 0 in one step.
+(``spring_damper``). theta = 1 evaluates the spring at the step's end (backward Euler), which
+adds a numerical damping theta k dt to d; theta = 0 at its start (the symplectic Euler of the
+spring), which adds none. Stiff limits: k, d -> infinity with d / k -> 0 gives R -> 0 and
+b -> e / dt at theta = 1: the row is then rigid, its coordinate reaches e = 0 in one step.
+
+How implicit the contact spring is (``contact_theta``): theta = max(0, 1 - d / (k dt)). On a
+contact whose mass m_c = 1 / G_ii is small (m_c / d << dt), the step maps the gap to
+g+ = g (1 - k dt / (d + theta k dt)): with this theta the factor is 1 - k dt / d in [0, 1) for
+dt <= d / k (the paper's k and d: dt <= 1 ms), and 0 above, so the gap never overshoots, and the
+damping the step adds, theta k dt = max(0, k dt - d), is none at dt <= d / k and at most as
+much as is needed above. For every mass the step is stable at every dt: the spring-damper's
+map (g, w) -> (g+, w+) has its eigenvalues inside the unit circle when
+k dt^2 (1 - 2 theta) < 4 m_c + 2 d dt, which this theta meets (tests/test_compliance.py).
+The servo rows keep theta = 1 (their kp dt = 0.5 N m s/rad is a tenth of kd at 1 ms).
 
 The rows (assumption ids refer to ``docs/assumptions.md``):
 
 * contact normal, ``law="compliant"`` (A12): k = ``model.contact_stiffness``, d =
-  ``model.contact_damping`` on the gap e = g; a unilateral row (x >= 0), so the force is
-  max(0, -k g - d g') as in Simscape's spring-damper contact. ``law="rigid"``: eq. (2)-(6) as
-  written, the gap closes in one step (b = g / dt; a penetration is removed at the rate
-  beta g / dt, ``BAUMGARTE``), with the small compliance R = ``RIGID_COMPLIANCE`` G_ii of
-  MuJoCo's impedance (A15), so that redundant contacts get one force split;
+  ``model.contact_damping`` on the gap e = g, the spring at ``contact_theta``; a unilateral row
+  (x >= 0), so the force is max(0, -k g - d g') as in Simscape's spring-damper contact.
+  ``law="rigid"``: eq. (2)-(6) as written, the gap closes in one step (b = g / dt; a
+  penetration is removed at the rate beta g / dt, ``BAUMGARTE``), with the small compliance
+  R = ``RIGID_COMPLIANCE`` G_ii of MuJoCo's impedance (A15), so that redundant contacts get one
+  force split;
 * friction, compliant (A13): the smooth stick-slip law |f_T| = mu f_N min(1, |v_T| / v_s),
   whose sticking branch f_T = -(mu f_N / v_s) v_T is the row compliance R = v_s / (mu pbar_N)
   (pbar_N: the normal impulse of the friction fixed point, :mod:`cobra_ref.least_action`);
@@ -42,15 +56,24 @@ RIGID_COMPLIANCE = 1e-2  # R = RIGID_COMPLIANCE * G_ii for rigid rows (MuJoCo's 
 BAUMGARTE = 0.2  # rigid contact: fraction of a penetration removed per step
 
 
-def spring_damper(k, d, dt: float, e, v_ref=0.0):
-    """(R, b) of a row whose law is f = -k e(t+dt) - d (w - v_ref), implicit over the step.
+def spring_damper(k, d, dt: float, e, v_ref=0.0, theta=1.0):
+    """(R, b) of a row whose law is f = -k (e + theta dt w) - d (w - v_ref) over the step.
 
-    Implements: the module docstring's row law, R = 1 / (dt (k dt + d)),
-    b = (k e - d v_ref) / (k dt + d), for arrays of rows (k, d, e, v_ref broadcast).
+    Implements: the module docstring's row law, R = 1 / (dt (theta k dt + d)),
+    b = (k e - d v_ref) / (theta k dt + d), for arrays of rows (k, d, e, v_ref, theta broadcast).
     """
     k, d = np.asarray(k, dtype=float), np.asarray(d, dtype=float)
-    kdt_d = k * dt + d
-    return 1.0 / (dt * kdt_d), (k * np.asarray(e, dtype=float) - d * np.asarray(v_ref, dtype=float)) / kdt_d
+    damping = theta * k * dt + d  # the damper and what the step's spring adds to it
+    return 1.0 / (dt * damping), (k * np.asarray(e, dtype=float) - d * np.asarray(v_ref, dtype=float)) / damping
+
+
+def contact_theta(k, d, dt: float):
+    """theta = max(0, 1 - d / (k dt)): where in the step the contact spring is evaluated.
+
+    Implements: the module docstring's choice for the compliant contact (assumption A12): no
+    numerical damping while dt <= d / k, and no overshoot of a light contact's gap at any dt.
+    """
+    return np.maximum(0.0, 1.0 - np.asarray(d, dtype=float) / (np.asarray(k, dtype=float) * dt))
 
 
 def normal_rows(model, g: np.ndarray, G_NN: np.ndarray, dt: float, law: str):
@@ -61,7 +84,8 @@ def normal_rows(model, g: np.ndarray, G_NN: np.ndarray, dt: float, law: str):
     of a penetration and MuJoCo's small compliance, A15).
     """
     if law == "compliant":
-        return spring_damper(model.contact_stiffness, model.contact_damping, dt, g)
+        k, d = model.contact_stiffness, model.contact_damping
+        return spring_damper(k, d, dt, g, theta=contact_theta(k, d, dt))
     # rigid: a gap closes at most within the step (g / dt); a penetration is removed gradually
     b = np.where(g >= 0.0, g, BAUMGARTE * g) / dt
     return RIGID_COMPLIANCE * G_NN, b
