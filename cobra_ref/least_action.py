@@ -28,6 +28,7 @@ or inside the circle, is the minimiser over the circle. The loop::
     repeat:  x <- the box QP with (pbar_N, theta), from x      (OSQP)
              stop if the natural residual of x is below FP_TOL max p_N
              (pbar_N, theta, x) <- guess(x)
+             from iterate FP_RELAX_AFTER on: pbar_N <- (pbar_N_last + pbar_N) / 2
 
 ``guess`` solves the exact conditions of Coulomb's law on the active set of x (which contacts
 are released, which stick, which slide, which servo rows saturate) by Newton's method
@@ -36,7 +37,13 @@ stops (measured on the paper's gaits: about one QP per step). Where Newton's met
 predicts normal impulses more than ``NEWTON_MAX_GROWTH`` times the QP's (a wrong active set),
 the plain update pbar_N <- p_N, theta_i <- angle of z_i is taken instead, with
 z_i = p_T,i - r_T,i / a_i (a_i the mean of contact i's tangential diagonal of G + R: where its
-friction would go without a bound). The natural residual of Coulomb's law::
+friction would go without a bound). The plain update can cycle: on a step of the reliability
+sweep (scenario 77, J-mirror with prescribed joints, mu = 1.38, 17 contacts) it alternates
+between two guesses whose residuals stay at 0.48 and 0.61 for all 50 iterates, Newton's method
+failing on both. From iterate ``FP_RELAX_AFTER`` on, each new guess is therefore averaged with
+the last one, pbar_N <- (pbar_N_last + pbar_N) / 2 (a Krasnosel'skii-Mann step, which turns a
+2-cycle into a contraction towards its midpoint): that step then converges at iterate 30. The
+paper's runs converge within 4 iterates, so the averaging never acts on them. The natural residual of Coulomb's law::
 
     max_i max( |p_N,i - pbar_N,i|,  |p_T,i - P_{mu_i p_N,i}(z_i)| )        (P_r: onto the disk r)
 
@@ -60,6 +67,7 @@ from .qp import solve_box_qp
 
 FP_TOL = 1e-6  # natural residual of Coulomb's law, relative to max p_N
 FP_MAX = 50  # friction fixed-point iterates per step
+FP_RELAX_AFTER = 10  # from this iterate on, each new guess of pbar_N is averaged with the last one
 NEWTON_MAX_GROWTH = 3.0  # a Newton guess may at most triple the sum of the normal impulses
 RELEASED = 1e-9  # a contact whose normal impulse is below RELEASED max p_N carries nothing
 NEWTON_TOL = 1e-6  # Newton's iterations stop when a step changes no impulse by more than this (relative)
@@ -129,7 +137,12 @@ def solve_least_action(problem: LeastAction, x_start=None, solve_qp=solve_box_qp
         residual = natural_residual(p_N, p_T, z, pbar_N, problem.mu)
         if residual <= tol:
             break
+        last = pbar_N
         pbar_N, theta, x = guess(problem, x, theta)
+        # a loop that has not converged by now cycles (the plain update can alternate between two
+        # guesses): average, pbar_N <- (pbar_N_last + pbar_N) / 2 (Krasnosel'skii-Mann)
+        if k >= FP_RELAX_AFTER:
+            pbar_N = 0.5 * (last + pbar_N)
     return project_friction(x, problem.mu), LeastActionInfo(residual <= tol, k, qp_iterations, qp_solves,
                                                             residual, sol.status)
 

@@ -259,3 +259,24 @@ def test_the_fast_box_qp_gives_the_same_least_action_answer_as_osqp(rng):
         fast.new_step()
         answer, _ = solve_least_action(problem, solve_qp=fast)
         np.testing.assert_allclose(answer, reference, atol=1e-5 * max(np.abs(reference).max(), 1e-12) + 10 * EPS)
+
+
+def test_a_cycling_friction_fixed_point_converges_once_its_guesses_are_averaged(monkeypatch):
+    """One step of the reliability sweep (scenario 77: J-mirror, prescribed joints, mu = 1.38,
+    17 contacts; stored in tests/data/cycling_step.npz) on which the plain update alternates
+    between two guesses of the normal impulses (residuals 0.48 and 0.61) and Newton's method fails
+    on both. From iterate FP_RELAX_AFTER on, the loop averages each new guess with the last one:
+    it converges, and the answer meets Coulomb's law (the natural residual of kkt_residuals
+    below 1e-5). Without the averaging (FP_RELAX_AFTER beyond FP_MAX) it does not converge."""
+    from pathlib import Path
+
+    from cobra_ref import least_action
+
+    data = np.load(Path(__file__).parent / "data" / "cycling_step.npz")
+    problem = LeastAction(data["H"], data["c"], data["mu"], data["lo"], data["hi"], float(data["v_s"]))
+    x, info = solve_least_action(problem, data["x0"])
+    assert info.converged and least_action.FP_RELAX_AFTER < info.iterations <= least_action.FP_MAX, info
+    assert kkt_residuals(problem, x)["coulomb_residual"] < 1e-5
+    monkeypatch.setattr(least_action, "FP_RELAX_AFTER", least_action.FP_MAX + 1)
+    _, info = solve_least_action(problem, data["x0"])
+    assert not info.converged and info.residual > 0.1, info
