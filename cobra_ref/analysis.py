@@ -416,7 +416,8 @@ def ledger_residual(traj) -> float:
     bodies' work-energy balance misses over the run.
 
     Implements: the energy ledger of ``step.energies`` summed over the run; what remains is the
-    integrator's energy error (first order in dt).
+    integrator's energy error (second order in dt on smooth motion, with the velocity-product terms
+    at the step's midpoint velocity, ``step.midpoint_velocity``; first order across impacts).
     """
     s = traj.steps
     if not len(traj.tau):

@@ -26,7 +26,7 @@ or inside the circle, is the minimiser over the circle. The loop::
 
     x <- the previous step's impulses;  (pbar_N, theta, x) <- guess(x)
     repeat:  x <- the box QP with (pbar_N, theta), from x      (OSQP)
-             stop if the natural residual of x is below FP_TOL max p_N
+             stop if the natural residual of x is below FP_TOL max(max p_N, impulse_floor)
              (pbar_N, theta, x) <- guess(x)
              from iterate FP_RELAX_AFTER on: pbar_N <- (pbar_N_last + pbar_N) / 2
 
@@ -124,7 +124,7 @@ def solve_least_action(problem: LeastAction, x_start=None, solve_qp=solve_box_qp
         return np.zeros(0), LeastActionInfo(True, 0, 0, 0, 0.0, "solved")
     x = np.zeros(n) if x_start is None else np.asarray(x_start, dtype=float)
     pbar_N, theta, x = guess(problem, x)
-    qp_iterations, qp_solves = 0, 0
+    qp_iterations, qp_solves, floor = 0, 0, impulse_floor(problem)
     for k in range(1, max_iter + 1):
         # the box QP with the friction bound mu pbar_N, in tangent frames turned by theta
         H = hessian(problem, pbar_N)
@@ -134,7 +134,7 @@ def solve_least_action(problem: LeastAction, x_start=None, solve_qp=solve_box_qp
         qp_iterations, qp_solves = qp_iterations + sol.iterations, qp_solves + sol.solves
         # stop when the guesses are the ones this solution implies
         p_N, p_T, z = coulomb_split(x, H @ x + problem.c, H, m)
-        residual = natural_residual(p_N, p_T, z, pbar_N, problem.mu)
+        residual = natural_residual(p_N, p_T, z, pbar_N, problem.mu, floor)
         if residual <= tol:
             break
         last = pbar_N
@@ -247,18 +247,36 @@ def project_disk(v: np.ndarray, r: np.ndarray) -> np.ndarray:
     return v * scale[:, None]
 
 
-def natural_residual(p_N, p_T, z, pbar_N, mu) -> float:
-    """max_i max(|p_N,i - pbar_N,i|, |p_T,i - P_{mu_i p_N,i}(z_i)|) / max p_N (module docstring).
+def natural_residual(p_N, p_T, z, pbar_N, mu, floor: float = 0.0) -> float:
+    """max_i max(|p_N,i - pbar_N,i|, |p_T,i - P_{mu_i p_N,i}(z_i)|) / max(max p_N, floor) (module docstring).
 
     Implements: the natural-map residual of the Coulomb friction problem: zero exactly at a
-    solution of eq. (6) with F_i = {||p_T|| <= mu p_N}.
+    solution of eq. (6) with F_i = {||p_T|| <= mu p_N}. ``floor`` [N s]: the scale below which
+    an impulse is nothing (``impulse_floor``), so that a step whose candidate contacts all hover
+    is measured against it rather than against its own rounding.
     """
     if len(p_N) == 0:
         return 0.0
-    scale = max(float(p_N.max()), 1e-300)
+    scale = max(float(p_N.max()), floor, 1e-300)
     normal = np.abs(p_N - pbar_N).max()
     friction = np.hypot(*(p_T - project_disk(z, mu * np.maximum(p_N, 0.0))).T).max()
     return float(max(normal, friction) / scale)
+
+
+def impulse_floor(problem: LeastAction) -> float:
+    """RELEASED max_i |c_N,i| / H_NN,i [N s]: a billionth of the largest impulse that would stop a
+    contact's normal velocity at its own effective mass.
+
+    Helper: the floor of ``natural_residual``. Where every candidate contact hovers, the QPs' normal
+    impulses are rounding (1e-25 N s) and their residual relative to max p_N is rounding over
+    rounding, of order one, however exact the answer (no impulse) is; measured against this floor
+    such a step converges at its first iterate. Where contacts carry load, max p_N is far above it.
+    """
+    m = problem.m
+    if m == 0:
+        return 0.0
+    c_N, H_NN = problem.c[0:3 * m:3], np.diag(problem.H)[0:3 * m:3]
+    return RELEASED * float(np.max(np.abs(c_N) / H_NN))
 
 
 def project_friction(x: np.ndarray, mu: np.ndarray) -> np.ndarray:
@@ -474,4 +492,4 @@ def kkt_residuals(problem: LeastAction, x: np.ndarray) -> dict:
     scale = max(float(p_N.max()), 1e-300)
     cone = np.maximum(np.hypot(*p_T.T) - problem.mu * p_N, 0.0).max() / scale
     return {"complementarity": float(np.abs(p_N * r[0:3 * m:3]).max()), "cone_residual": float(cone),
-            "coulomb_residual": natural_residual(p_N, p_T, z, p_N, problem.mu)}
+            "coulomb_residual": natural_residual(p_N, p_T, z, p_N, problem.mu, impulse_floor(problem))}

@@ -3,8 +3,9 @@
 Implements: the start at rest of assumption A25. The robot is placed in the reference's t = 0
 shape (a 3-D shape laid on its flattest side), its lowest sphere touching the ground, the box
 beside its middle (A9); then the scene settles with the joints holding that shape, under the run's own contact law and
-servo, for at least ``SETTLE_TIME`` and until no coordinate moves faster than ``SETTLE_SPEED``
-(at most ``SETTLE_MAX``), so that every sphere that carries weight rests on the ground and the
+servo, for at least ``SETTLE_TIME`` and until no coordinate has moved faster than ``SETTLE_SPEED``
+for ``SETTLE_STILL`` in a row (at most ``SETTLE_MAX``; a shape rolling onto its side passes through
+slow turning points, which one slow step would mistake for rest), so that every sphere that carries weight rests on the ground and the
 run does not begin with a fall. (A planar rolling shape only sinks by the contacts' sag and
 settles within ``SETTLE_TIME``; sidewinding's 3-D shape first rolls onto a stable side, in
 about 1.5 s.)
@@ -23,6 +24,7 @@ from .step import StepSettings
 SETTLE_TIME = 0.05  # [s] the scene settles at least this long with the joints holding the start shape (A25)
 SETTLE_MAX = 3.0  # [s] and at most this long
 SETTLE_SPEED = 1e-2  # [m/s, rad/s] until no coordinate moves faster (below the impact speed of A26)
+SETTLE_STILL = 0.05  # [s] ... for this long in a row
 
 
 def initial_state(model: Model, reference, settings: StepSettings = StepSettings(), box_offset=None,
@@ -45,10 +47,12 @@ def initial_state(model: Model, reference, settings: StepSettings = StepSettings
         hold = _Hold(reference(0.0)[0])
         stepper = FastStepper(model, settings)
         least, most = int(round(SETTLE_TIME / settings.dt)), int(round(SETTLE_MAX / settings.dt))
+        still, calm = int(round(SETTLE_STILL / settings.dt)), 0  # steps in a row below SETTLE_SPEED
         for k in range(most):
             result = stepper.step(q, qd, k * settings.dt, hold)
             q, qd = result.q, result.qd
-            if k + 1 >= least and np.abs(qd).max() < SETTLE_SPEED:
+            calm = calm + 1 if np.abs(qd).max() < SETTLE_SPEED else 0
+            if k + 1 >= least and calm >= still:
                 break
     return q, qd
 

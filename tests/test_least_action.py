@@ -280,3 +280,28 @@ def test_a_cycling_friction_fixed_point_converges_once_its_guesses_are_averaged(
     monkeypatch.setattr(least_action, "FP_RELAX_AFTER", least_action.FP_MAX + 1)
     _, info = solve_least_action(problem, data["x0"])
     assert not info.converged and info.residual > 0.1, info
+
+
+def test_a_step_whose_contacts_all_hover_converges_at_its_first_iterate(monkeypatch):
+    """One step of the reliability sweep (scenario 22: J, mu = 1.47, 14 candidate contacts, the
+    robot in the air; stored in tests/data/hovering_step.npz): every contact separates (c_N > 0),
+    so the answer carries no contact impulse. OSQP's normal impulses are rounding, about 1e-25 N s,
+    and measured against their own max p_N the natural residual is rounding over rounding (1.5-60
+    for all 50 iterates). Measured against ``impulse_floor`` (a billionth of max c_N / H_NN) the
+    step converges at its first iterate, with complementarity and Coulomb's residual at rounding."""
+    from pathlib import Path
+
+    from cobra_ref import least_action
+
+    data = np.load(Path(__file__).parent / "data" / "hovering_step.npz")
+    problem = LeastAction(data["H"], data["c"], data["mu"], data["lo"], data["hi"], float(data["v_s"]))
+    m = problem.m
+    assert np.all(problem.c[0:3 * m:3] > 0), "every contact separates"
+    x, info = solve_least_action(problem, data["x0"])
+    assert info.converged and info.iterations == 1, info
+    assert np.abs(x[:3 * m]).max() < 1e-20
+    res = kkt_residuals(problem, x)
+    assert res["complementarity"] < 1e-20 and res["coulomb_residual"] < 1e-12
+    monkeypatch.setattr(least_action, "impulse_floor", lambda problem: 0.0)
+    _, info = solve_least_action(problem, data["x0"])
+    assert not info.converged and info.residual > 1.0, info

@@ -267,6 +267,58 @@ def test_differential_evolution_is_deterministic_for_a_seed_and_starts_from_x0()
     assert len(runs[0]) == 5 * 4  # max(5, popsize * n) members, initial population + 3 generations
 
 
+def test_the_companion_search_keeps_the_optimum_from_having_more_impacts_than_the_unpenalized_one(problem, monkeypatch):
+    """Made-up rollouts over u = frequency - 0.5 in [0, 1], from u = 0 (step 0.25), w_I = 10:
+    G = J - w_I I = 1 - 0.2 u falls to the right, and I = 0.05 + 0.04 u up to u = 0.5, then
+    0.07 - 0.06 (u - 0.5). The search of J alone polls u = 0.25 (J = 1.55), 0.125, ... against
+    J(0) = 1.5 and stays at u = 0 with I = 0.05; the search of G walks right to u = 1 (G = 0.8,
+    I = 0.04, J = 1.2): on its own the penalized search would end with more impacts than the
+    unpenalized one. The optimum is the least J over both searches' rollouts, u = 1, which is also
+    the least G: the same rollout, so the same impacts."""
+    from cobra_ref.planning import search
+
+    def made_up(problem, x):
+        u = float(x[0]) - 0.5
+        G, I = 1 - 0.2 * u, (0.05 + 0.04 * u if u <= 0.5 else 0.07 - 0.06 * (u - 0.5))
+        return {"params": {"frequency": float(x[0])}, "error": None, "cost": G + 10 * I, "box_distance_to_goal": 0.0,
+                "terms": {"impact": I}, "contact": {"impact_impulse": I * 58.86 * problem.duration}}
+
+    monkeypatch.setattr(search, "evaluate", made_up)
+    alone = sh.optimize(problem, maxiter=6, executor=sh.SerialExecutor(), companion=False)
+    assert alone.best["params"]["frequency"] == 0.5 and alone.best["terms"]["impact"] == 0.05
+    result = sh.optimize(problem, maxiter=6, executor=sh.SerialExecutor())
+    assert result.best["params"]["frequency"] == pytest.approx(1.5) and result.best["terms"]["impact"] == pytest.approx(0.04)
+    assert result.best["cost"] == min(e["cost"] for e in result.history)
+    record = sh.results.impact_comparison(result)
+    assert record["same"] and not record["lower"]
+    assert record["without_impact_term"]["cost_without_impact"] == min(
+        search.cost_without_impact(problem, e) for e in result.history)
+    # every point is rolled out once, whichever search polled it
+    assert len({e["params"]["frequency"] for e in result.history}) == len(result.history)
+
+
+def test_the_optimums_impacts_are_at_most_the_unpenalized_optimums_on_any_landscape(problem, monkeypatch):
+    """Over one common set of rollouts, J(p*) <= J(p0) and G(p0) <= G(p*) give w_I I(p*) <= w_I I(p0):
+    random landscapes, each optimum's impact term no larger than the unpenalized optimum's."""
+    from cobra_ref.planning import search
+
+    for seed in range(5):
+        rng = np.random.default_rng(seed)
+        a, b = rng.uniform(-1, 1, 6), rng.uniform(0, 0.05, 6)
+
+        def made_up(problem, x, a=a, b=b):
+            u = float(x[0]) - 0.5
+            G = sum(a[k] * np.cos((k + 1) * 3 * u) for k in range(6))
+            I = sum(b[k] * (1 + np.sin((k + 2) * 2 * u)) for k in range(6))
+            return {"params": {"frequency": float(x[0])}, "error": None, "cost": G + 10 * I, "box_distance_to_goal": 0.0,
+                    "terms": {"impact": I}, "contact": {"impact_impulse": I * problem.duration}}
+
+        monkeypatch.setattr(search, "evaluate", made_up)
+        record = sh.results.impact_comparison(sh.optimize(problem, maxiter=8, executor=sh.SerialExecutor()))
+        assert record["optimum"]["impact_impulse_per_s"] <= record["without_impact_term"]["impact_impulse_per_s"]
+        assert record["lower"] or record["same"]
+
+
 # --- the params JSON and its replay -----------------------------------------------------------------
 
 

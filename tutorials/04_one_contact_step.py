@@ -303,6 +303,8 @@ print("step():", res.info)
 # %% [markdown]
 # That one call did blocks 1-7 of `cobra_ref/step.py`. We redo them. **Blocks 1-3**: M and h
 # (tutorial 02); with the position servo every coordinate is free, and `u_free = u - dt M^-1 h`.
+# (h's velocity-product terms are evaluated at the step's midpoint velocity w, extrapolated
+# from the last step's change, `step.midpoint_velocity`; on a first step w is u itself.)
 
 # %%
 M, h = cr.crba(model, q), cr.bias_force(model, q, qd)

@@ -27,7 +27,7 @@ from ..least_action import kkt_residuals, solve_least_action
 from ..model import Model
 from ..quaternion import quat_exp, quat_mul
 from ..step import (StepResult, StepSettings, _reference, approach_speed, energies, joint_coordinates,
-                    least_action_problem, warm_start, warm_start_memory)
+                    least_action_problem, midpoint_velocity, warm_start, warm_start_memory)
 from .chain import ChainModel
 from .contacts import contact_jacobian, find_contacts
 from .least_action import FastBoxQP
@@ -71,8 +71,8 @@ class FastStepper:
         s, model, dt, F, P = self.s, self.model, self.s.dt, self.free, self.prescribed
         clock = [time.perf_counter()]
         tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
-        # Steps 1-3: eq. (1), the joints, qd_free over the free coordinates
-        terms = self.chain.terms(q, qd)
+        # Steps 1-3: eq. (1) with h at the midpoint velocity, the joints, qd_free over the free coordinates
+        terms = self.chain.terms(q, midpoint_velocity(qd, self.memory))
         M, h = terms.M, terms.h
         qd_next = qd.copy()
         q_ref, qd_ref, _ = _reference(reference, t + dt)  # the joints' reference at the end of the step
@@ -103,7 +103,7 @@ class FastStepper:
             tau = (M @ (qd_next - qd) / dt + h - J_c.T @ p / dt - tau_ext)[self.joints.v]
         else:
             tau = x[3 * contacts.m:] / dt
-        self.memory = warm_start_memory(contacts, x)
+        self.memory = warm_start_memory(contacts, x, qd)
         potential = float(-self.chain.mass @ (terms.com @ model.gravity))
         result = StepResult(self._integrate(q, qd_next), qd_next, tau, contacts, p, J_c @ qd_next, info,
                             kkt_residuals(problem, x), approach_speed(J_c, qd), np.diag(G)[:3 * contacts.m:3],

@@ -191,7 +191,31 @@ def result_to_dict(result: ShootingResult) -> dict:
             "optimizer": {"method": result.method, "seed": result.seed, "maxiter": result.maxiter,
                           "iterations": result.iterations, "rollouts": len(result.history), **result.options},
             "code": code_version(), "wall_time": result.wall_time,
+            "impacts": impact_comparison(result),
             **({"transfer": result.transfer} if result.transfer is not None else {}), "history": result.history}
+
+
+def impact_comparison(result) -> dict | None:
+    """The optimum beside the rollout of least J - w_I I (the companion search's, ``search.optimize``):
+    for each, the rollout's index, parameters, J - w_I I, box distance to the goal [m] and impact
+    impulse per second [N s/s]; ``lower`` is true when the optimum's impact impulse is below the
+    other's, ``same`` when both are one rollout. None without the companion search.
+
+    Helper: the "with and without the impact term" record of the params JSON.
+    """
+    if result.without_impact is None:
+        return None
+    from .search import cost_without_impact
+
+    def row(e: dict) -> dict:
+        impulse = None if e.get("contact") is None else e["contact"]["impact_impulse"] / result.problem.duration
+        return {"rollout": e["rollout"], "params": e["params"], "cost_without_impact": cost_without_impact(result.problem, e),
+                "box_distance_to_goal": e["box_distance_to_goal"], "impact_impulse_per_s": impulse}
+
+    a, b = row(result.best), row(result.without_impact)
+    return {"optimum": a, "without_impact_term": b, "same": a["rollout"] == b["rollout"],
+            "lower": (a["impact_impulse_per_s"] is not None and b["impact_impulse_per_s"] is not None
+                      and a["impact_impulse_per_s"] < b["impact_impulse_per_s"])}
 
 
 def write_result(result: ShootingResult, path: str) -> dict:
@@ -301,6 +325,13 @@ def summary_lines(result: ShootingResult) -> list[str]:
                      f"N s m/s, max cone residual {c['max_cone_residual']:.2e}, {c['steps_not_converged']} steps "
                      f"with the friction fixed point not converged; torque over tau_max in {c['steps_over_tau_max']} steps "
                      f"(max excess {c['max_tau_excess']:.2f} N m), max |q| - q_max {c['max_q_excess']:.3f} rad")
+    impacts = impact_comparison(result)
+    if impacts and impacts["optimum"]["impact_impulse_per_s"] is not None and \
+            impacts["without_impact_term"]["impact_impulse_per_s"] is not None:
+        o, u = impacts["optimum"], impacts["without_impact_term"]
+        lines.append(f"impact impulse {o['impact_impulse_per_s']:.4g} N s/s at the optimum; without the impact term the best "
+                     f"rollout is " + ("the same one" if impacts["same"] else
+                                       f"rollout {u['rollout']}, {u['impact_impulse_per_s']:.4g} N s/s"))
     return lines
 
 

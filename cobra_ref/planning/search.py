@@ -40,6 +40,7 @@ class ShootingResult:
     message: str
     wall_time: float
     transfer: dict | None = None  # results.transfer of the optimum, when checked (optimize_gait)
+    without_impact: dict | None = None  # the rollout of least J - w_I I (optimize's companion search)
 
     @property
     def params(self) -> dict:
@@ -49,22 +50,40 @@ class ShootingResult:
 
 
 class _Evaluations:
-    """Runs batches of rollouts on the executor, keeps the history and prints a line per batch."""
+    """Runs batches of rollouts on the executor, keeps the history and prints a line per batch.
+
+    A point already rolled out (by either search of ``optimize``) is not run again: the rollouts
+    are deterministic, and ``index`` keeps each point's history entry.
+    """
 
     def __init__(self, problem: ShootingProblem, executor: Executor, progress, maxiter: int):
         self.problem, self.executor, self.progress, self.maxiter = problem, executor, progress, maxiter
         self.history: list = []
+        self.index: dict = {}
+        self.label, self.search = "", "J"
         self.iteration, self.start = 0, time.perf_counter()
 
-    def best(self) -> dict | None:
-        return min(self.history, key=lambda e: e["cost"]) if self.history else None
+    def best(self, cost=lambda e: e["cost"]) -> dict | None:
+        """The history entry of least ``cost`` (default J; the first of equals)."""
+        return min(self.history, key=cost) if self.history else None
 
     def __call__(self, xs) -> list:
-        """Evaluate the batch xs in parallel; return the costs in order (a Ctrl-C keeps what finished)."""
+        """J of each x in the batch xs, in order (``entries``)."""
+        return [e["cost"] for e in self.entries(xs)]
+
+    def without_impact(self, xs) -> list:
+        """J - w_I I of each x in the batch xs, in order: the companion search's cost."""
+        return [cost_without_impact(self.problem, e) for e in self.entries(xs)]
+
+    def entries(self, xs) -> list:
+        """The history entry of each x in xs, rolling out in parallel the points not run before
+        (a Ctrl-C keeps what finished)."""
+        xs = [np.asarray(x, dtype=float) for x in xs]
+        new = list({_key(x): x for x in xs if _key(x) not in self.index}.values())
         futures, done = [], []
         try:
-            for x in xs:
-                futures.append(self.executor.submit(evaluate, self.problem, np.asarray(x, dtype=float)))
+            for x in new:
+                futures.append(self.executor.submit(evaluate, self.problem, x))
             for f in futures:
                 done.append(f.result())
         except KeyboardInterrupt:
@@ -73,22 +92,37 @@ class _Evaluations:
             self._record([f.result() for f in futures if f.done() and not f.cancelled() and f.exception() is None])
             raise
         self._record(done)
-        return [e["cost"] for e in done]
+        self.index.update(zip(map(_key, new), done))
+        return [self.index[_key(x)] for x in xs]
 
     def _record(self, entries) -> None:
         if not entries:
             return
         for e in entries:
-            self.history.append({"rollout": len(self.history), "iteration": self.iteration, **e})
+            self.history.append({"rollout": len(self.history), "search": self.search, "iteration": self.iteration, **e})
         if self.progress:
             self.progress(self._line(entries))
         self.iteration += 1
 
     def _line(self, entries) -> str:
         it, b, best = self.iteration, min(entries, key=lambda e: e["cost"]), self.best()
-        return (f"iteration {it:>2}/{self.maxiter}: {len(entries)} rollouts, cost {b['cost']:.5g}, box to goal "
+        return (f"{self.label}iteration {it:>2}/{self.maxiter}: {len(entries)} rollouts, cost {b['cost']:.5g}, box to goal "
                 f"{_distance_text(b)}; best so far {best['cost']:.5g} ({_distance_text(best)}), "
                 f"{len(self.history)} rollouts, {time.perf_counter() - self.start:.0f} s")
+
+
+def _key(x) -> tuple:
+    """A rolled-out point, up to rounding (the searches compute the same point the same way)."""
+    return tuple(np.round(np.asarray(x, dtype=float), 12))
+
+
+def cost_without_impact(problem: ShootingProblem, entry: dict) -> float:
+    """J - w_I I of a history entry (a failed rollout keeps its J).
+
+    Helper: the cost the companion search of ``optimize`` minimizes.
+    """
+    terms = entry.get("terms")
+    return entry["cost"] if terms is None else entry["cost"] - problem.weights.impact * terms["impact"]
 
 
 def _distance_text(entry: dict) -> str:
@@ -98,7 +132,8 @@ def _distance_text(entry: dict) -> str:
 
 def optimize(problem: ShootingProblem, method: str = "pattern", maxiter: int = DEFAULT_MAXITER,
              executor: Executor | None = None, seed: int = 0, progress=None, step: float = 0.25,
-             min_step: float = 1 / 64, popsize: int = 2, workers: int | None = None) -> ShootingResult:
+             min_step: float = 1 / 64, popsize: int = 2, workers: int | None = None,
+             companion: bool = True) -> ShootingResult:
     """Minimise J(p) over the bounds from ``problem.x0``; every rollout goes through ``executor``.
 
     Implements: the single-shooting optimizer (derivative-free, bounded, deterministic).
@@ -116,6 +151,16 @@ def optimize(problem: ShootingProblem, method: str = "pattern", maxiter: int = D
     with x0 as its first member, ``popsize`` * n members, ``updating="deferred"``, ``polish=False``,
     ``rng=seed``), whose ``workers`` map is our executor: a global search for users with an
     executor bigger than one machine (for example Dask's ``Client.get_executor()``).
+
+    The companion search (``companion``, when w_I > 0): after the search of J, the same search
+    from the same x0 minimizes J - w_I I, the cost without the impact term, on the same record of
+    rollouts (a point either search polled runs once). The optimum is the rollout of least J among
+    all of both searches, and ``without_impact`` the rollout of least J - w_I I among the same.
+    Over one common set of rollouts this makes the optimum's impact term no larger than the
+    unpenalized optimum's: J(p*) <= J(p0) and J(p0) - w_I I(p0) <= J(p*) - w_I I(p*) give
+    w_I I(p*) <= w_I I(p0), equal only when both are the same rollout (or tie). Without the
+    companion, a local search's two optima come from two different paths, and either can have
+    fewer impacts (docs/planning.md, "With and without the impact term").
 
     ``executor``: any ``concurrent.futures.Executor`` whose workers can import cobra_ref; default
     ``default_executor(workers)``, a process pool on the local cores, shut down at the end.
@@ -135,6 +180,10 @@ def optimize(problem: ShootingProblem, method: str = "pattern", maxiter: int = D
     try:
         search = _compass_search if method == "pattern" else _differential_evolution
         message = search(problem, evals, maxiter, seed=seed, **options)
+        iterations = evals.iteration
+        if companion and problem.weights.impact > 0:
+            evals.label, evals.search, evals.iteration = "without the impact term: ", "J - w_I I", 0
+            message += "; without the impact term: " + search(problem, evals.without_impact, maxiter, seed=seed, **options)
     except KeyboardInterrupt:
         interrupted, message = True, "interrupted (Ctrl-C): the best rollout so far is kept"
     finally:
@@ -142,8 +191,11 @@ def optimize(problem: ShootingProblem, method: str = "pattern", maxiter: int = D
             shutdown(executor, interrupted)
     if not evals.history:
         raise ShootingError("interrupted before any rollout finished: nothing to keep")
-    return ShootingResult(problem, method, seed, int(maxiter), options, evals.history, evals.best(),
-                          max(evals.iteration - 1, 0), interrupted, message, time.perf_counter() - evals.start)
+    iterations = evals.iteration if evals.search == "J" else iterations
+    unpenalized = evals.best(lambda e: cost_without_impact(problem, e)) if evals.search != "J" else None
+    return ShootingResult(problem, method, seed, int(maxiter), {**options, "companion": evals.search != "J"},
+                          evals.history, evals.best(), max(iterations - 1, 0), interrupted, message,
+                          time.perf_counter() - evals.start, without_impact=unpenalized)
 
 
 def compass_search(evaluate_batch, x0, lower, upper, maxiter: int, step: float = 0.25,
@@ -230,7 +282,7 @@ def optimize_gait(name: str, goal=None, out: str | None = None, duration: float 
     ``optimize`` (method, seed, popsize, step, workers).
     """
     d_goal, d_duration, d_maxiter = DEFAULTS[name]
-    run_keys = {"method", "seed", "popsize", "step", "min_step", "workers"}
+    run_keys = {"method", "seed", "popsize", "step", "min_step", "workers", "companion"}
     problem = make_problem(name, d_goal if goal is None else goal, duration=duration or d_duration,
                            **{k: v for k, v in options.items() if k not in run_keys})
     if progress is None:
