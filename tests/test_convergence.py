@@ -65,9 +65,9 @@ def test_a_tiny_study_measures_every_metric_at_every_dt(tiny_study):
     rows = tiny_study["high-fidelity"]
     assert sorted(rows) == [1e-3, 2e-3]
     for m in rows.values():
-        assert m["force_peak"] >= m["force_peak_2ms"] >= 0.0
-        assert m["torque_peak"] >= m["torque_peak_2ms"] >= 0.0
-        assert m["power_peak"] >= m["power_peak_2ms"] >= 0.0
+        # a mean is at most the peak (to rounding: a mean over one step is that step's value, summed)
+        for q in ("force", "torque", "power"):
+            assert m[f"{q}_peak"] * (1 + 1e-12) >= m[f"{q}_peak_2ms"] >= 0.0
         assert m["fixed_point_converged"] == 1.0
     # the robot rests on the ground: its weight, about 6 kg g, is carried at every step
     assert rows[1e-3]["force_p99"] > 0.0
