@@ -441,6 +441,26 @@ def test_optimize_cli_writes_the_json_and_one_json_line(tmp_path, capsys, monkey
     assert "INTERRUPTED" in capsys.readouterr().err
 
 
+def test_optimize_cli_no_companion_skips_the_search_without_the_impact_term(tmp_path, capsys):
+    """One compass iteration with and without `--no-companion`: the flag leaves out the companion
+    search (no 'impacts' comparison in the JSON, never more rollouts); without it the JSON compares
+    the optimum with the unpenalized one, whose impact term is never lower than the optimum's."""
+    out = tmp_path / "p.json"
+    argv = ["optimize", "--gait", "C", "--goal", "0.05,-0.01", "--duration", "0.3", "--ramp-time", "0.1",
+            "--box-gap", "0.005", "--workers", "1", "--maxiter", "1", "--quiet", "--out", str(out)]
+    assert run_cli(argv) == 0
+    both = json.loads(out.read_text())
+    assert run_cli(argv + ["--no-companion"]) == 0
+    alone = json.loads(out.read_text())
+    capsys.readouterr()
+    assert both["optimizer"]["companion"] is True and alone["optimizer"]["companion"] is False
+    assert alone.get("impacts") is None and both["impacts"] is not None
+    assert both["impacts"]["optimum"]["impact_impulse_per_s"] <= both["impacts"]["without_impact_term"]["impact_impulse_per_s"]
+    assert len(alone["history"]) <= len(both["history"])
+    # the search of J itself is the same: its first rollouts are the same points with the same costs
+    assert [h["cost"] for h in alone["history"]] == [h["cost"] for h in both["history"][:len(alone["history"])]]
+
+
 def test_problem_is_picklable_and_rebuilt_from_json(problem):
     import pickle
 

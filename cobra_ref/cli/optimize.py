@@ -83,6 +83,9 @@ def add_parsers(sub) -> None:
     p.add_argument("--workers", type=RULES["workers"].arg("--workers"), default=None,
                    help="worker processes (default: the cores; 1 = serial, in this process)")
     p.add_argument("--out", required=True, help="output params JSON")
+    p.add_argument("--no-companion", dest="companion", action="store_false",
+                   help="skip the companion search without the impact term (fewer rollouts; OUT then has no "
+                        "'impacts' comparison of the optimum with the unpenalized optimum)")
     p.add_argument("--quiet", action="store_true", help="no progress lines (the summary is still printed)")
     p.set_defaults(func=cmd_optimize)
 
@@ -112,7 +115,7 @@ def cmd_optimize(args) -> int:
         err(f"optimize {args.gait}: goal {goal} m from the box's start {np.round(problem.box_pose0[:2], 4)}, "
             f"{len(problem.names)} parameters ({', '.join(problem.names)}), {duration} s rollouts, maxiter {maxiter}")
         result = optimize(problem, method=args.method, maxiter=maxiter, seed=args.seed,
-                          popsize=args.popsize, progress=None if args.quiet else err,
+                          popsize=args.popsize, companion=args.companion, progress=None if args.quiet else err,
                           executor=SerialExecutor() if args.workers == 1 else None, workers=args.workers)
     record = write_result(result, args.out)
     for line in summary_lines(result):
