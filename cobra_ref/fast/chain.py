@@ -25,8 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..model import Model, ModelError
-from ..quaternion import quat_to_rot
-from ..spatial import cross_rows, skew, skew_rows
+from ..spatial import skew
 
 _AXIS = {"Rx": 0, "Ry": 1, "Rz": 2}
 
@@ -52,6 +51,7 @@ class ChainModel:
                 raise ModelError(f"fastdyn needs chains (parent[i] in {{i-1, -1}}); body {i} has parent {parent}")
         self.model = model
         nb, nv = model.nb, model.nv
+        self.nb, self.nv = nb, nv  # Model computes these on each access
         self.root = np.array([i if model.parent[i] < 0 else -1 for i in range(nb)])
         for i in range(nb):
             if self.root[i] < 0:
@@ -90,89 +90,130 @@ class ChainModel:
         # the chains' root bodies after the first (their sums restart there)
         self.chain_starts = [i for i in range(1, nb) if model.parent[i] < 0]
         self.tree_rot_cols = (self.tree_rot[self.rev_body, :, self.rev_j], self.tree_rot[self.rev_body, :, self.rev_k])
+        self._precompute_indices()
+
+    def _precompute_indices(self):
+        """Constant index arrays and factors of ``terms``: the elements that fancy indexing would
+        read, as slices and flat ``take`` indices (fewer NumPy calls per step, the same numbers)."""
+        model, rev = self.model, self.rev_body
+        # index arrays that are contiguous ranges become slices (views of the same elements)
+        self._rev_q, self._rev_v = _index(self.rev_q), _index(self.rev_v)
+        self._rev_body, self._rev_parent = _index(rev), _index(rev - 1)
+        self.tree_rot_rev, self.tree_pos_rev = self.tree_rot[rev], self.tree_pos[rev]
+        # R_rel's columns j and k, flat in (nrev, 3, 3), are c a + s b with a = [col_j, col_k] and
+        # b = [col_k, -col_j] (c col_k + s (-col_j) is c col_k - s col_j, bit for bit)
+        cols_j, cols_k = self.tree_rot_cols
+        flat = np.arange(len(rev))[:, None] * 9 + np.arange(3) * 3
+        self.rel_flat = np.hstack([flat + self.rev_j[:, None], flat + self.rev_k[:, None]])
+        self.rel_a, self.rel_b = np.hstack([cols_j, cols_k]), np.hstack([cols_k, -cols_j])
+        # the chain product: (body, first q index of a free joint or -1, row of R_rel or -1); a
+        # revolute chain root has no parent rotation (terms raises ValueError, as it always has)
+        self.pose_plan = [(i, model.q_idx[i].start, -1) if jt == "free" else (i, -1, int(np.flatnonzero(rev == i)[0]))
+                          for i, jt in enumerate(model.joint_type)]
+        self.revolute_root = any(model.parent[i] < 0 for i in rev)
+        # the world joint axes z = R[rev, :, axis] flat in R (nb, 3, 3), and the components of o x z
+        # (component r of a x b is a[P1] b[P2] - a[P2] b[P1]) flat in R and o (nb, 3)
+        P1, P2 = np.array([1, 2, 0]), np.array([2, 0, 1])
+        axis_flat = rev[:, None] * 9 + self.rev_axis[:, None]
+        self.axis_flat = axis_flat + np.arange(3) * 3
+        self.axis_flat_1, self.axis_flat_2 = axis_flat + P1 * 3, axis_flat + P2 * 3
+        self.o_flat_1, self.o_flat_2 = rev[:, None] * 3 + P1, rev[:, None] * 3 + P2
+        # free joints: bodies and q indices of their positions
+        self.free_body = np.array([i for i, _, _ in self.free], dtype=int)
+        self.free_pos = np.array([np.arange(start, start + 3) for _, start, _ in self.free], dtype=int).reshape(-1, 3)
+        # the body of each revolute dof; each later chain's first dof; m 1 of the world inertias
+        self.rev_dof_body = self.dof_body[self.rev_v]
+        self.chain_start_dofs = [model.v_idx[i].start for i in self.chain_starts]
+        self.m_eye = self.mass[:, None, None] * np.eye(3)
 
     def terms(self, q, qd) -> ChainTerms:
         """R, o, S, V, M and h at (q, qd): the same numbers as forward_kinematics, crba, bias_force."""
+        nb = self.nb
+        if self.revolute_root:
+            raise ValueError("fastdyn needs a free joint at each chain root")
         R, o = self._poses(q)
-        S, c_free = self._motion_subspace(R, o, qd)
+        S, c = self._motion_subspace(R, o, qd)
         # V_i = cumulative sum of S_k qd_k within each chain, read at each body's last dof
         Sqd = (S * qd).T
-        V = self._chain_cumsum(Sqd)[self.last_dof]
-        # c_k = V_body(k) x S_k qd_k for revolute dofs (zero for their own body: use V of the body)
-        c = _motion_cross(V[self.dof_body], Sqd)
-        c[self.free_dofs] = c_free
-        A = self.a_0 + self._chain_cumsum(c)[self.last_dof]
+        V = self._chain_cumsum(Sqd).take(self.last_dof, axis=0)
+        # c_k = V_body(k) x S_k qd_k for revolute dofs (zero for their own body: use V of the body);
+        # the free joints' rows of c are already set
+        c[self._rev_v] = _motion_cross(V.take(self.rev_dof_body, axis=0), Sqd[self._rev_v])
+        A = self.a_0 + self._chain_cumsum(c).take(self.last_dof, axis=0)
         com = o + np.einsum("bij,bj->bi", R, self.com)
         I_w = self._world_inertias(R, com)
-        f = np.einsum("bij,bj->bi", I_w, A) + _force_cross(V, np.einsum("bij,bj->bi", I_w, V))
-        F = self._subtree_sum(f)
-        h = np.einsum("ki,ki->i", S, F[self.dof_body].T)
-        Ic = self._subtree_sum(I_w.reshape(len(I_w), 36)).reshape(-1, 6, 6)
-        IcS = np.einsum("kij,jk->ik", Ic[self.dof_body], S)  # (6, nv): Ic_body(l) S_l
+        # f (nb, 6) and I_w (nb, 36) side by side: one subtree sum gives F and Ic
+        fI = np.empty((nb, 42))
+        np.add(np.einsum("bij,bj->bi", I_w, A), _force_cross(V, np.einsum("bij,bj->bi", I_w, V)), out=fI[:, :6])
+        fI[:, 6:] = I_w.reshape(nb, 36)
+        fI = self._subtree_sum(fI)
+        F, Ic = fI[:, :6], fI[:, 6:].reshape(nb, 6, 6)
+        h = np.einsum("ki,ki->i", S, F.take(self.dof_body, axis=0).T)
+        IcS = np.einsum("kij,jk->ik", Ic.take(self.dof_body, axis=0), S)  # (6, nv): Ic_body(l) S_l
         # M[k, l] = S_k^T Ic_body(l) S_l for k <= l in one chain; the lower triangle by symmetry
         M = np.where(self.upper_same_chain, S.T @ IcS, 0.0)
         M = M + M.T
-        M.flat[::len(M) + 1] *= 0.5
+        M.reshape(-1)[::len(M) + 1] *= 0.5  # the diagonal (M is contiguous: a view)
         return ChainTerms(R, o, S, V, M, h, com)
 
     def _poses(self, q):
         """Body orientations and origins; joint rotations batched, the chain product in a loop."""
-        model = self.model
-        theta = q[self.rev_q]
+        theta = q[self._rev_q]
         c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
         # R_rel = R_tree Rot_axis(theta): rotate columns j, k of R_tree in their plane
-        R_rel = self.tree_rot[self.rev_body].copy()
-        cols_j, cols_k = self.tree_rot_cols
-        rows = np.arange(len(theta))
-        R_rel[rows, :, self.rev_j] = c * cols_j + s * cols_k
-        R_rel[rows, :, self.rev_k] = c * cols_k - s * cols_j
-        R, n = [None] * model.nb, 0
-        for i, jt in enumerate(model.joint_type):
-            if jt == "free":
-                start = model.q_idx[i].start
-                R[i] = quat_to_rot(q[start + 3:start + 7])
+        R_rel = self.tree_rot_rev.copy()
+        R_rel.put(self.rel_flat, c * self.rel_a + s * self.rel_b)
+        R = np.empty((self.nb, 3, 3))
+        for i, start, n in self.pose_plan:
+            if n < 0:
+                # quaternion.quat_to_rot, written straight into R (the same Python float arithmetic)
+                w, x, y, z = q[start + 3:start + 7].tolist()
+                R[i] = ((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
+                        (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
+                        (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)))
             else:
-                R[i] = R[i - 1] @ R_rel[n]
-                n += 1
-        R = np.array(R)
+                # R_parent @ R_rel: np.dot makes the same BLAS call (dgemm) as matmul, with less overhead
+                np.dot(R[i - 1], R_rel[n], out=R[i])
         # o_i = o_parent + R_parent tree_pos_i: a cumulative sum along each chain from its root
         # (free joint) position; the free joints' rows of tree_pos are replaced by those positions
-        steps = np.einsum("bij,bj->bi", R[self.rev_body - 1], self.tree_pos[self.rev_body])
-        d = np.empty((model.nb, 3))
-        d[self.rev_body] = steps
-        for i, start, _ in self.free:
-            d[i] = q[start:start + 3]
-        o = np.cumsum(d, axis=0)
+        d = np.empty((self.nb, 3))
+        d[self._rev_body] = np.einsum("bij,bj->bi", R[self._rev_parent], self.tree_pos_rev)
+        d[self.free_body] = q.take(self.free_pos)
+        o = np.add.accumulate(d, axis=0)  # np.cumsum
         for i in self.chain_starts:
             o[i:] -= o[i - 1]
         return R, o
 
     def _motion_subspace(self, R, o, qd):
-        """World motion subspace S (6, nv) and the free joints' velocity-product terms (6k, 6)."""
+        """World motion subspace S (6, nv), and c (nv, 6) with the free joints' velocity-product
+        terms in their rows (the revolute rows are left for ``terms``)."""
         S = self.S_template.copy()
-        axes = R[self.rev_body, :, self.rev_axis]
-        S[:3, self.rev_v] = axes.T
-        S[3:, self.rev_v] = cross_rows(o[self.rev_body], axes).T
-        c = np.zeros((6 * len(self.free), 6))
+        # revolute columns [z; o x z], read from R and o by flat index
+        S[:3, self._rev_v] = R.take(self.axis_flat).T
+        S[3:, self._rev_v] = (o.take(self.o_flat_1) * R.take(self.axis_flat_2)
+                              - o.take(self.o_flat_2) * R.take(self.axis_flat_1)).T
+        c = np.zeros((self.nv, 6))
+        R_free = R.take(self.free_body, axis=0)
+        oxR = _skew_rows(o.take(self.free_body, axis=0)) @ R_free
         for n, (i, _, v) in enumerate(self.free):
-            S[:3, v + 3:v + 6] = R[i]
-            S[3:, v + 3:v + 6] = skew(o[i]) @ R[i]
+            S[:3, v + 3:v + 6] = R_free[n]
+            S[3:, v + 3:v + 6] = oxR[n]
             # the free joint's velocity-product term in world coordinates: [0; -w_world x v_world]
-            w, u = R[i] @ qd[v + 3:v + 6], qd[v:v + 3]
-            c[6 * n + 5, 3:] = (w[2] * u[1] - w[1] * u[2], w[0] * u[2] - w[2] * u[0], w[1] * u[0] - w[0] * u[1])
+            w0, w1, w2 = np.dot(R_free[n], qd[v + 3:v + 6]).tolist()  # R w_body (dgemv, as matmul)
+            u0, u1, u2 = qd[v:v + 3].tolist()
+            c[v + 5, 3:] = (w2 * u1 - w1 * u2, w0 * u2 - w2 * u0, w1 * u0 - w0 * u1)
         return S, c
 
     def _chain_cumsum(self, x):
         """Cumulative sum over dofs (rows of x), restarting at each chain's first dof."""
-        out = np.cumsum(x, axis=0)
-        for i in self.chain_starts:
-            start = self.model.v_idx[i].start
+        out = np.add.accumulate(x, axis=0)  # np.cumsum
+        for start in self.chain_start_dofs:
             out[start:] -= out[start - 1]
         return out
 
     def _subtree_sum(self, x):
         """Sum over each body's descendants (rows = bodies), chains in reverse order."""
-        out = np.cumsum(x[::-1], axis=0)[::-1].copy()
+        out = np.add.accumulate(x[::-1], axis=0)[::-1]  # np.cumsum
         for i in self.chain_starts:
             out[:i] -= out[i]
         return out
@@ -180,15 +221,15 @@ class ChainModel:
     def _world_inertias(self, R, c):
         """Spatial inertias in world coordinates at the origin, [[Ic + m C C^T, m C], [m C^T, m 1]]
         with C = [c]x for the world centres of mass c (nb, 3)."""
+        nb = len(R)
         Ic = R @ self.I_com @ R.transpose(0, 2, 1)
-        C = skew_rows(c)
-        m = self.mass[:, None, None]
-        mC = m * C
-        I_w = np.empty((len(R), 6, 6))
-        I_w[:, :3, :3] = Ic + mC @ C.transpose(0, 2, 1)
+        C = _skew_rows(c)
+        mC = self.mass[:, None, None] * C
+        I_w = np.empty((nb, 6, 6))
+        np.add(Ic, mC @ C.transpose(0, 2, 1), out=I_w[:, :3, :3])
         I_w[:, :3, 3:] = mC
         I_w[:, 3:, :3] = mC.transpose(0, 2, 1)
-        I_w[:, 3:, 3:] = m * np.eye(3)
+        I_w[:, 3:, 3:] = self.m_eye
         return I_w
 
     def point_jacobian(self, terms: ChainTerms, body: int, x: np.ndarray) -> np.ndarray:
@@ -198,24 +239,58 @@ class ChainModel:
         """
         start = self.model.v_idx[self.root[body]].start
         stop = self.last_dof[body] + 1
-        J = np.zeros((3, self.model.nv))
+        J = np.zeros((3, self.nv))
         J[:, start:stop] = terms.S[3:, start:stop] - skew(x) @ terms.S[:3, start:stop]
         return J
 
 
+# the three cross products of a spatial cross product as columns of (n, 9) arrays: component r
+# of a x b is a[P1] b[P2] - a[P2] b[P1], P1 = (1, 2, 0), P2 = (2, 0, 1); angular part 0:3,
+# linear part 3:6. Columns of v (rows a1, a2) and of m or f (rows b1, b2) for the three products:
+_MOTION_CROSS = (np.array([[1, 2, 0, 1, 2, 0, 4, 5, 3], [2, 0, 1, 2, 0, 1, 5, 3, 4]]),
+                 np.array([[2, 0, 1, 5, 3, 4, 2, 0, 1], [1, 2, 0, 4, 5, 3, 1, 2, 0]]))
+_FORCE_CROSS = (np.array([[1, 2, 0, 4, 5, 3, 1, 2, 0], [2, 0, 1, 5, 3, 4, 2, 0, 1]]),
+                np.array([[2, 0, 1, 5, 3, 4, 5, 3, 4], [1, 2, 0, 4, 5, 3, 4, 5, 3]]))
+
+
+def _cross_products(v, m, columns):
+    """(n, 9): three row-wise 3-D cross products of parts of v and m (n, 6), columns as above."""
+    a, b = columns  # (2, 9) each: a1 b1 in row 0, a2 b2 in row 1
+    p = v.take(a, axis=1) * m.take(b, axis=1)
+    return p[:, 0] - p[:, 1]
+
+
 def _motion_cross(v, m):
     """Row-wise v x m for motion vectors ([RBDA] eq. 2.31), arrays (n, 6):
-    [w x m_ang ; w x m_lin + v_O x m_ang], the three products in one batched call."""
-    n = len(v)
-    w, vo = v[:, :3], v[:, 3:]
-    x = cross_rows(np.concatenate([w, w, vo]), np.concatenate([m[:, :3], m[:, 3:], m[:, :3]]))
-    return np.concatenate([x[:n], x[n:2 * n] + x[2 * n:]], axis=1)
+    [w x m_ang ; w x m_lin + v_O x m_ang] (a view of columns 0:6 of the three products)."""
+    x = _cross_products(v, m, _MOTION_CROSS)
+    np.add(x[:, 3:6], x[:, 6:], out=x[:, 3:6])
+    return x[:, :6]
 
 
 def _force_cross(v, f):
     """Row-wise v x* f for force vectors ([RBDA] eq. 2.32), arrays (n, 6):
-    [w x f_ang + v_O x f_lin ; w x f_lin], the three products in one batched call."""
-    n = len(v)
-    w, vo = v[:, :3], v[:, 3:]
-    x = cross_rows(np.concatenate([w, vo, w]), np.concatenate([f[:, :3], f[:, 3:], f[:, 3:]]))
-    return np.concatenate([x[:n] + x[n:2 * n], x[2 * n:]], axis=1)
+    [w x f_ang + v_O x f_lin ; w x f_lin] (a view of columns 3:9 of the three products)."""
+    x = _cross_products(v, f, _FORCE_CROSS)
+    np.add(x[:, :3], x[:, 3:6], out=x[:, 3:6])
+    return x[:, 3:]
+
+
+# [w]x flat in a 3 x 3: entries 1, 2, 3, 5, 6, 7 are -w2, w1, w2, -w0, -w1, w0, the rest +0
+_SKEW_FLAT, _SKEW_COMP = np.array([1, 2, 3, 5, 6, 7]), np.array([2, 1, 2, 0, 1, 0])
+_SKEW_SIGN = np.array([-1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
+
+
+def _skew_rows(w):
+    """spatial.skew_rows(w) (k, 3, 3) in fewer NumPy calls: the same numbers (w * -1.0 is -w)."""
+    out = np.zeros((len(w), 9))
+    out[:, _SKEW_FLAT] = w.take(_SKEW_COMP, axis=1) * _SKEW_SIGN
+    return out.reshape(-1, 3, 3)
+
+
+def _index(idx):
+    """idx as a slice when it is a contiguous increasing range (the same elements, as a view)."""
+    idx = np.asarray(idx, dtype=int)
+    if len(idx) and np.array_equal(idx, np.arange(idx[0], idx[0] + len(idx))):
+        return slice(int(idx[0]), int(idx[0]) + len(idx))
+    return idx
