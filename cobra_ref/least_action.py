@@ -397,21 +397,34 @@ class _NewtonSystem:
     def __init__(self, problem: LeastAction, act: ActiveSet):
         m, n = problem.m, len(problem.c)
         S = np.flatnonzero(act.sliding)
-        size = n + len(S)
+        k = len(S)
+        size = n + k
         self.problem, self.m, self.n, self.S = problem, m, n, S
-        self.N, self.T1, self.T2, self.D = 3 * S, 3 * S + 1, 3 * S + 2, n + np.arange(len(S))
+        N = 3 * S
+        self.N, self.T1, self.T2, self.D = N, N + 1, N + 2, np.arange(n, size)
         self.T = np.concatenate([self.T1, self.T2])
-        self.pinned = np.flatnonzero(np.concatenate([np.repeat(act.released, 3), act.at_lo | act.at_hi]))
-        self.target = np.concatenate([np.zeros(3 * m), np.where(act.at_lo, problem.lo, problem.hi)])[self.pinned]
+        pinned = np.zeros(n, dtype=bool)
+        pinned[:3 * m] = np.repeat(act.released, 3)
+        pinned[3 * m:] = act.at_lo | act.at_hi
+        self.pinned = np.flatnonzero(pinned)
+        target = np.zeros(n)
+        target[3 * m:] = np.where(act.at_lo, problem.lo, problem.hi)
+        self.target = target[self.pinned]
         self.G_TT = _tangential_diagonal(problem.H, m)
         self.R_max = STICK_SLIP_MAX * self.G_TT
         # positions in K.flat of every contact's tangential diagonal entries (3i+1, 3i+1), (3i+2, 3i+2),
         # of their derivatives by p_N, (3i+1, 3i), (3i+2, 3i), and of the pinned rows' diagonal
-        i = np.arange(m)
-        tangent = np.concatenate([3 * i + 1, 3 * i + 2])
-        self.tangent, self.diag_T, self.dT_dN = tangent, tangent * (size + 1), tangent * size + np.concatenate([3 * i, 3 * i])
+        tangent, normal = _tangent_rows(m)
+        self.tangent, self.diag_T, self.dT_dN = tangent, tangent * (size + 1), tangent * size + normal
         self.diag_pinned = self.pinned * (size + 1)
+        # positions in K.flat of the circle's entries, in the order ``at`` lists their values:
+        # (T1, T1), (T2, T2), (T1, N), (T2, N), (T1, D), (T2, D), (D, D)
+        T1, T2, D = self.T1 * size, self.T2 * size, self.D * size
+        self.circle = np.concatenate([T1 + self.T1, T2 + self.T2, T1 + N, T2 + N, T1 + self.D, T2 + self.D,
+                                      D + self.D])
+        self.ones = np.ones(2 * k)
         self.K = np.zeros((size, size))
+        self.K_flat = self.K.reshape(-1)  # a view
         self.F = np.zeros(size)
 
     def residual(self, X) -> np.ndarray:
@@ -420,34 +433,40 @@ class _NewtonSystem:
 
     def at(self, X, theta):
         """(K, F, r) at (X, theta) (``coulomb_newton``'s system)."""
-        problem, m, n, K, F = self.problem, self.m, self.n, self.K, self.F
+        problem, m, n, K, K_flat, F = self.problem, self.m, self.n, self.K, self.K_flat, self.F
         N, T1, T2, D = self.N, self.T1, self.T2, self.D
         p_N = np.maximum(X[0:3 * m:3], 0.0)
         R_T = stick_slip_compliance(problem.stiction_velocity, problem.mu * p_N, self.G_TT)
         K[:n, :n], K[:n, n:] = problem.H, 0.0
-        K.flat[self.diag_T] += np.concatenate([R_T, R_T])
+        K_flat[self.diag_T] += np.concatenate([R_T, R_T])
         r = K[:n, :n] @ X + problem.c
         F[:n] = r
         # the stick-slip compliance R_T = v_s / (mu p_N) where it is not capped: d r_T / d p_N = -R_T p_T / p_N
         uncapped = (R_T < self.R_max) & (p_N > 0)
         dR = np.where(uncapped, R_T / np.where(uncapped, p_N, 1.0), 0.0)
-        K.flat[self.dT_dN] -= np.concatenate([dR, dR]) * X[self.tangent]
+        K_flat[self.dT_dN] -= np.concatenate([dR, dR]) * X[self.tangent]
         # sliding contact i (row D): p_T = mu p_N e(theta) and e_perp . r_T = 0, d e_perp / d theta = -e
         mu, c, sn = problem.mu[self.S], np.cos(theta[self.S]), np.sin(theta[self.S])
         K[D, :n] = c[:, None] * K[T2, :n] - sn[:, None] * K[T1, :n]
         K[D, n:] = 0.0
-        F[D] = c * r[T2] - sn * r[T1]
-        K[D, D] = -(c * r[T1] + sn * r[T2])
+        r_T1, r_T2, mu_p_N = r[T1], r[T2], mu * X[N]
+        F[D] = c * r_T2 - sn * r_T1
+        # its tangent rows: the circle's conditions, in place of the law's rows
         K[self.T] = 0.0
-        K[T1, T1] = K[T2, T2] = 1.0
-        K[T1, N], K[T2, N] = -mu * c, -mu * sn
-        K[T1, D], K[T2, D] = mu * X[N] * sn, -mu * X[N] * c
-        F[T1], F[T2] = X[T1] - mu * X[N] * c, X[T2] - mu * X[N] * sn
+        K_flat[self.circle] = np.concatenate([self.ones, -mu * c, -mu * sn, mu_p_N * sn, -mu_p_N * c,
+                                              -(c * r_T1 + sn * r_T2)])
+        F[T1], F[T2] = X[T1] - mu_p_N * c, X[T2] - mu_p_N * sn
         # released contacts and saturated servo rows are pinned at their targets
         K[self.pinned] = 0.0
-        K.flat[self.diag_pinned] = 1.0
+        K_flat[self.diag_pinned] = 1.0
         F[self.pinned] = X[self.pinned] - self.target
         return K, F, r
+
+
+def _tangent_rows(m: int) -> tuple[np.ndarray, np.ndarray]:
+    """(tangent, normal): the rows 3i+1 then 3i+2 of the m contacts, and each one's normal row 3i."""
+    i = np.arange(m)
+    return np.concatenate([3 * i + 1, 3 * i + 2]), np.concatenate([3 * i, 3 * i])
 
 
 def _corrected(problem: LeastAction, X, theta, act: ActiveSet, r) -> ActiveSet:
