@@ -248,7 +248,7 @@ def midpoint_velocity(qd: np.ndarray, previous: dict | None) -> np.ndarray:
     Implements: where the velocity-product terms C(q, qd) qd of eq. (1) (Coriolis, centripetal,
     gyroscopic) are evaluated. At qd (explicit Euler in these terms) their energy error is
     first order in dt; at w it is second order on smooth motion, as
-    ``tests/test_stepper_physics.py`` measures on a tumbling chain, and the energy ledger closes
+    ``tests/test_stepper_physics.py`` measures on a tumbling body, and the energy ledger closes
     within 1 % at dt = 2 ms (``cobra-ref sweep``). w is linear in the velocities, so mirrored
     runs stay mirrored; gravity does not depend on the velocity.
     """

@@ -146,7 +146,7 @@ def optimize(problem: ShootingProblem, method: str = "pattern", maxiter: int = D
     dozen rollouts; the compass search starts from the known-good default gait, needs no gradient
     (J is non-smooth through the contacts), uses the 2n independent polls to fill the cores, never
     re-runs a point, and makes progress within a few dozen rollouts (C at its defaults: cost 1.19 ->
-    0.060, box 0.055 -> 0.002 m from the goal in 22 rollouts). It has no randomness (``seed`` is recorded only).
+    0.059, box 0.055 -> 0.001 m from the goal in 22 rollouts). It has no randomness (``seed`` is recorded only).
     ``method="de"``: ``scipy.optimize.differential_evolution`` (best1bin, Latin hypercube start
     with x0 as its first member, ``popsize`` * n members, ``updating="deferred"``, ``polish=False``,
     ``rng=seed``), whose ``workers`` map is our executor: a global search for users with an
