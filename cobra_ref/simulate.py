@@ -164,10 +164,11 @@ class _Log:
         s["max_penetration"][k] = max(0.0, -float(cs.g.min())) if cs.m else 0.0
         s["n_contacts"][k] = cs.m
         if len(joints.v):
+            q_joint = res.q[joints.q]
             s["tau_excess"][k] = float((np.abs(res.tau) - joints.tau_max).max())
-            s["q_excess"][k] = float((np.abs(res.q[joints.q]) - joints.q_max).max())
+            s["q_excess"][k] = float((np.abs(q_joint) - joints.q_max).max())
             s["qd_excess"][k] = float((np.abs(res.qd[joints.v]) - joints.qd_max).max())
-            s["tracking_error"][k] = float(np.abs(res.q[joints.q] - res.q_ref).max())
+            s["tracking_error"][k] = float(np.abs(q_joint - res.q_ref).max())
         else:
             s["tau_excess"][k] = s["q_excess"][k] = s["qd_excess"][k] = -np.inf
         for key in ("kinetic", "potential", "elastic", "work_actuators", "work_contacts"):
@@ -176,23 +177,25 @@ class _Log:
         # the contact log, and the impacts: contacts that start carrying load while approaching
         active = np.flatnonzero(res.p[0::3] > 0.0)
         keys = cs.keys()
-        onset = np.array([keys[i] not in self.loaded for i in active], dtype=bool)
+        active_keys = [keys[i] for i in active.tolist()]
+        onset = np.array([key not in self.loaded for key in active_keys], dtype=bool)
         speed = np.where(onset, res.approach[active], 0.0)
         impact = speed > IMPACT_SPEED
         if impact.any():  # (the arrays start at zero)
             s["impact_count"][k] = int(impact.sum())
             s["impact_impulse"][k] = float(np.sum(speed[impact] / res.G_NN[active][impact]))
             s["impact_energy"][k] = float(np.sum(0.5 * speed[impact] ** 2 / res.G_NN[active][impact]))
-        self.loaded = {keys[i] for i in active}
+        self.loaded = set(active_keys)
         if len(active):
             rows = self.contact_rows
+            frame = cs.frame[active]
             rows["contact_step"].append(np.full(len(active), k))
             rows["contact_kind"].append(cs.kind[active])
             rows["contact_body"].append(cs.body_A[active])
             rows["contact_point"].append(0.5 * (cs.point_A[active] + cs.point_B[active]))
-            rows["contact_normal"].append(cs.frame[active, :, 0])
+            rows["contact_normal"].append(frame[:, :, 0])
             p3 = res.p.reshape(-1, 3)[active]
-            rows["contact_force"].append((cs.frame[active] @ p3[:, :, None])[:, :, 0] / self.dt)
+            rows["contact_force"].append((frame @ p3[:, :, None])[:, :, 0] / self.dt)
             rows["contact_onset_speed"].append(speed)
         self.n = k + 1
 

@@ -237,7 +237,8 @@ def warm_start_memory(contacts: Contacts, x: np.ndarray, qd: np.ndarray) -> dict
     """
     m = contacts.m
     P = np.einsum("kij,kj->ki", contacts.frame, x[:3 * m].reshape(m, 3))
-    return {"contacts": {key: P[i] for i, key in enumerate(contacts.keys()) if x[3 * i] > 0.0},
+    loaded = (x[0:3 * m:3] > 0.0).tolist()  # the contacts with a normal impulse
+    return {"contacts": {key: P[i] for i, (key, on) in enumerate(zip(contacts.keys(), loaded)) if on},
             "servo": x[3 * m:].copy(), "qd": np.array(qd, dtype=float)}
 
 

@@ -95,21 +95,22 @@ def solve_box(H, c, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = RO
         before = at_lo, at_hi
         x = np.where(at_hi, hi, lo)
         free = ~(at_lo | at_hi)
-        if free.any():
-            x[free] = 0.0
+        F = np.flatnonzero(free)  # the free variables' indices (take copies rows faster than a mask)
+        if len(F):
+            x[F] = 0.0
             # H_FF x_F = -(c_F + H_FW x_W): LAPACK's Cholesky solve (posv)
-            H_F = H[free]
-            _, x_F, info = _posv(H_F[:, free], -(c[free] + H_F @ x), lower=True)
+            H_F = H.take(F, 0)
+            _, x_F, info = _posv(H_F.take(F, 1), -(c.take(F) + H_F @ x), lower=True)
             if info != 0:
                 return None
-            x[free] = x_F
+            x[F] = x_F
         r = H @ x + c
         # a guessed set is most often right: its solution is certified at once
-        if k == 0 and guess is not None and box_certificate(H, c, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, r):
+        if k == 0 and guess is not None and _certified(c, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, r, fixed, free):
             return x, at_lo, at_hi, r
     else:
         return None  # the held set still changes: leave it to OSQP
-    if not box_certificate(H, c, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, r):
+    if not _certified(c, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, r, fixed, free):
         return None
     return x, at_lo, at_hi, r
 
@@ -123,10 +124,15 @@ def box_certificate(H, c, lo, hi, x, at_lo, at_hi, eps_abs: float, eps_rel: floa
     OSQP's tolerance eps_abs + eps_rel * scale.
     """
     r = H @ x + c if r is None else r
-    fixed = lo == hi
-    free = ~(at_lo | at_hi)
+    return _certified(c, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, r, lo == hi, ~(at_lo | at_hi))
+
+
+def _certified(c, lo, hi, x, at_lo, at_hi, eps_abs: float, eps_rel: float, r, fixed, free) -> bool:
+    """``box_certificate`` with r = H x + c, the fixed (lo = hi) and the free variables given."""
     abs_g = np.abs(r)
-    tol_p, tol_d = _box_tolerances(x, r, free, eps_abs, eps_rel)
+    # OSQP's tolerances (_box_tolerances): |r| times the held mask is |r times that mask|
+    tol_p = eps_abs + eps_rel * float(np.abs(x).max())
+    tol_d = eps_abs + eps_rel * float((abs_g * ~free).max())
     # held variables sit on a bound, so the largest violation over all variables is the free ones'
     if max(float((lo - x).max()), float((x - hi).max())) > tol_p:
         return False

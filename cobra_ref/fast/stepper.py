@@ -78,16 +78,22 @@ class FastStepper:
         q_ref, qd_ref, _ = _reference(reference, t + dt)  # the joints' reference at the end of the step
         if s.servo == "prescribed":
             qd_next[self.joints.v] = (q_ref - q[self.joints.q]) / dt
-        M_F = M[F]
-        L = _cholesky(M_F[:, F])
-        rhs = dt * (tau_ext - h)[F] - M_F[:, P] @ (qd_next[P] - qd[P])
-        qd_next[F] = qd[F] + _potrs(L, rhs, lower=1)[0]
+        if len(P):
+            M_F = M[F]
+            L = _cholesky(M_F[:, F])
+            rhs = dt * (tau_ext - h)[F] - M_F[:, P] @ (qd_next[P] - qd[P])
+            qd_next[F] = qd[F] + _potrs(L, rhs, lower=1)[0]
+        else:
+            # every coordinate free (F = all, P = none): the same numbers without the index copies,
+            # and without subtracting M_FP (qd_next - qd)_P = 0 (x - 0.0 is x)
+            L = _cholesky(M)
+            qd_next = qd + _potrs(L, dt * (tau_ext - h), lower=1)[0]
         clock.append(time.perf_counter())
         # Steps 4-5: contacts, J_c, the rows J over F, G = B^T B with B = L^-1 J_F^T
         contacts = find_contacts(model, terms, s.margin)
         J_c = contact_jacobian(self.chain, terms, contacts)
         J = np.concatenate([J_c, self.servo_J])
-        B = _trtrs(L, J[:, F].T, lower=1)[0]
+        B = _trtrs(L, (J[:, F] if len(P) else J).T, lower=1)[0]
         Minv_JT = _trtrs(L, B, lower=1, trans=1)[0]
         G = B.T @ B
         problem = least_action_problem(model, G, J @ qd_next, contacts, q, q_ref, qd_ref, s, self.joints)
@@ -97,7 +103,10 @@ class FastStepper:
         x, info = solve_least_action(problem, warm_start(contacts, self.memory, len(problem.c)), self.qp)
         clock.append(time.perf_counter())
         # Step 7: velocity, torques, energy ledger, position
-        qd_next[F] += Minv_JT @ x
+        if len(P):
+            qd_next[F] += Minv_JT @ x
+        else:
+            qd_next += Minv_JT @ x
         p = x[:3 * contacts.m]
         if s.servo == "prescribed":
             tau = (M @ (qd_next - qd) / dt + h - J_c.T @ p / dt - tau_ext)[self.joints.v]
