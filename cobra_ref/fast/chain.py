@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..model import Model, ModelError
-from ..spatial import skew
+from ..spatial import skew, skew_rows
 
 _AXIS = {"Rx": 0, "Ry": 1, "Rz": 2}
 
@@ -194,7 +194,7 @@ class ChainModel:
                               - o.take(self.o_flat_2) * R.take(self.axis_flat_1)).T
         c = np.zeros((self.nv, 6))
         R_free = R.take(self.free_body, axis=0)
-        oxR = _skew_rows(o.take(self.free_body, axis=0)) @ R_free
+        oxR = skew_rows(o.take(self.free_body, axis=0)) @ R_free
         for n, (i, _, v) in enumerate(self.free):
             S[:3, v + 3:v + 6] = R_free[n]
             S[3:, v + 3:v + 6] = oxR[n]
@@ -223,7 +223,7 @@ class ChainModel:
         with C = [c]x for the world centres of mass c (nb, 3)."""
         nb = len(R)
         Ic = R @ self.I_com @ R.transpose(0, 2, 1)
-        C = _skew_rows(c)
+        C = skew_rows(c)
         mC = self.mass[:, None, None] * C
         I_w = np.empty((nb, 6, 6))
         np.add(Ic, mC @ C.transpose(0, 2, 1), out=I_w[:, :3, :3])
@@ -274,18 +274,6 @@ def _force_cross(v, f):
     x = _cross_products(v, f, _FORCE_CROSS)
     np.add(x[:, :3], x[:, 3:6], out=x[:, 3:6])
     return x[:, 3:]
-
-
-# [w]x flat in a 3 x 3: entries 1, 2, 3, 5, 6, 7 are -w2, w1, w2, -w0, -w1, w0, the rest +0
-_SKEW_FLAT, _SKEW_COMP = np.array([1, 2, 3, 5, 6, 7]), np.array([2, 1, 2, 0, 1, 0])
-_SKEW_SIGN = np.array([-1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
-
-
-def _skew_rows(w):
-    """spatial.skew_rows(w) (k, 3, 3) in fewer NumPy calls: the same numbers (w * -1.0 is -w)."""
-    out = np.zeros((len(w), 9))
-    out[:, _SKEW_FLAT] = w.take(_SKEW_COMP, axis=1) * _SKEW_SIGN
-    return out.reshape(-1, 3, 3)
 
 
 def _index(idx):

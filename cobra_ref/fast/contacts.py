@@ -12,7 +12,8 @@ import numpy as np
 
 from .. import gaps as gapfn
 from ..contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND, Contacts
-from .chain import ChainModel, ChainTerms, _skew_rows
+from ..spatial import skew_rows
+from .chain import ChainModel, ChainTerms
 
 
 def find_contacts(model, terms: ChainTerms, margin: float) -> Contacts:
@@ -82,4 +83,4 @@ def contact_jacobian(chain: ChainModel, terms: ChainTerms, contacts: Contacts) -
 def _point_jacobians(chain: ChainModel, terms: ChainTerms, body: np.ndarray, x: np.ndarray) -> np.ndarray:
     """(k, 3, nv) world Jacobians of the body-fixed points at world positions x (k, 3):
     S_lin - [x]x S_ang on the dofs that move each body."""
-    return (terms.S[3:] - _skew_rows(x) @ terms.S[:3]) * chain.moves.take(body, axis=0)[:, None, :]
+    return (terms.S[3:] - skew_rows(x) @ terms.S[:3]) * chain.moves.take(body, axis=0)[:, None, :]
