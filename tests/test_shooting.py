@@ -226,6 +226,7 @@ def test_committed_optima_load_and_replay():
         assert t["plan_distance_to_goal"] == record["box_distance_to_goal"], name
         assert record["terms"]["impact"] == pytest.approx(
             t["plan_impact_impulse_per_s"] / 58.86, rel=1e-12), name
+        assert list(record["box_path"]["xy"][-1]) == record["box_final"], name  # the path ends where the box did
     run = params_reference(os.path.join(OPTIMIZED_DIR, "C.json"), duration=0.2)
     traj = simulate(run.model, run.reference, run.duration, run.settings, run.q0, run.qd0)
     np.testing.assert_array_equal(traj.box_pose[0], run.problem.box_pose0)
@@ -471,28 +472,49 @@ def test_problem_is_picklable_and_rebuilt_from_json(problem):
 
 # --- the optimization figure of `cobra-ref figures` --------------------------------------------------
 
-def test_optimization_figure_replays_each_optimum_once(params_file, tmp_path, monkeypatch):
-    """fig_optimization comes from the params JSONs; the optimum's box path is replayed once,
-    then read from the cache (a second call must not simulate: replay is made to fail)."""
+def test_optimization_figure_draws_the_recorded_box_path_and_replays_only_a_json_without_one(
+        params_file, tmp_path, monkeypatch):
+    """fig_optimization comes from the params JSONs. The optimization keeps its optimum's box path
+    (every BOX_PATH_DT = 10 ms, and the last step): exactly the replay's path at those steps, so the
+    figure needs no simulation (replay is made to fail). A JSON without the path (written before
+    it was kept) is replayed once, then read from the cache."""
     import shutil
 
+    from cobra_ref.planning.cost import BOX_PATH_DT
     from cobra_ref.reproduce import regenerate
 
     directory, out, cache = tmp_path / "optimized", tmp_path / "out", tmp_path / "cache"
     directory.mkdir()
     out.mkdir()
     shutil.copy(params_file, directory / "C.json")
+    record = sh.load_result(str(params_file))
+    replayed, _ = sh.replay(str(params_file))
+    every = int(round(BOX_PATH_DT / record["problem"].dt))
+    n = len(replayed.box_pose)
+    assert record["box_path"]["dt"] == BOX_PATH_DT
+    np.testing.assert_array_equal(record["box_path"]["xy"],
+                                  replayed.box_pose[[*range(0, n, every)] + ([n - 1] if (n - 1) % every else []), :2])
+    assert list(record["box_path"]["xy"][-1]) == record["box_final"]
+
+    def no_simulation(*args, **kw):
+        raise AssertionError("replayed although the JSON holds the path (or the cache does)")
+
+    monkeypatch.setattr(sh, "replay", no_simulation)
     files = regenerate._optimization_figures(str(directory), ["C"], str(out), str(cache), False)
     assert sorted(os.path.basename(f) for f in files) == ["fig_optimization.pdf", "fig_optimization.png"]
     with open(out / "fig_optimization.png", "rb") as f:
         assert f.read(4) == b"\x89PNG"
-    path = regenerate._replayed_box_path(str(directory / "C.json"), str(cache))
-    replayed, _ = sh.replay(str(params_file))
-    assert np.array_equal(path, replayed.box_pose[:, :2])
+    assert regenerate._replays_submit(None, str(directory), ["C"], str(cache)) == []
+    # a JSON without the path: replayed once (the executor gets it), then from the cache
+    old = json.loads(params_file.read_text())
+    del old["box_path"]
+    (directory / "C.json").write_text(json.dumps(old))
+    monkeypatch.undo()
+    from cobra_ref.executors import SerialExecutor
 
-    def no_simulation(*args, **kw):
-        raise AssertionError("replayed again although the cache holds the path")
-
+    futures = regenerate._replays_submit(SerialExecutor(), str(directory), ["C"], str(cache))
+    assert len(futures) == 1
+    np.testing.assert_array_equal(futures[0].result(), replayed.box_pose[:, :2])
     monkeypatch.setattr(sh, "replay", no_simulation)
     regenerate._optimization_figures(str(directory), ["C"], str(out), str(cache), False)
 

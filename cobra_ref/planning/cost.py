@@ -13,6 +13,8 @@ from ..step import SimulationError
 from ..trajectory import Trajectory
 from .problem import FAILED_COST, ShootingProblem, rollout
 
+BOX_PATH_DT = 0.01  # [s] spacing of the box path kept with each rollout (the optimum's is drawn)
+
 
 def robot_weight(model) -> float:
     """m_robot g [N]: the robot's weight (every body that is not a box) under the model's gravity.
@@ -88,7 +90,9 @@ def contact_report(traj: Trajectory, tau_max: float) -> dict:
 
 def evaluate(problem: ShootingProblem, x) -> dict:
     """One rollout's history entry: params, cost, box_distance_to_goal, the cost terms, the final
-    box position, the contact and limit report, and the error if the simulation failed.
+    box position, the contact and limit report, and the error if the simulation failed; and
+    ``box_path``, the box's (x, y) every ``BOX_PATH_DT`` and at the end ((n, 2) array), which the
+    params JSON keeps for the optimum only (``results.result_to_dict``).
 
     Helper: what the executor runs (a module-level function: picklable for a process pool).
     """
@@ -104,5 +108,8 @@ def evaluate(problem: ShootingProblem, x) -> dict:
         entry.update(shooting_cost(problem, traj))
     if traj is not None:
         entry["box_final"] = [float(v) for v in traj.box_pose[-1, :2]]
+        every = max(1, int(round(BOX_PATH_DT / problem.dt)))
+        rows = np.unique(np.append(np.arange(0, len(traj.box_pose), every), len(traj.box_pose) - 1))
+        entry["box_path"] = traj.box_pose[rows, :2].copy()
         entry["contact"] = contact_report(traj, problem.cobra_parameters().tau_max)
     return entry

@@ -18,7 +18,7 @@ from ..output import atomic_write
 from ..gaits import gait
 from ..robots import cobra_model
 from ..trajectory import Trajectory
-from .cost import shooting_cost
+from .cost import BOX_PATH_DT, shooting_cost
 from .problem import DECISION, FORMAT, ShootingError, ShootingProblem, Weights, rollout, start_state
 
 CHECK_DT = 5e-4  # [s] the high-fidelity check's step: from 1 to 0.5 ms the box displacement of C and J
@@ -183,16 +183,20 @@ def result_to_dict(result: ShootingResult) -> dict:
     Helper: the output of ``cobra-ref optimize``.
     """
     best = result.best
+    path = best.get("box_path")
     return {"format": FORMAT, "gait": result.problem.gait, "params": result.params,
             "cost": best["cost"], "box_distance_to_goal": best["box_distance_to_goal"],
-            "terms": best["terms"], "box_final": best.get("box_final"), "contact": best.get("contact"),
+            "terms": best["terms"], "box_final": best.get("box_final"),
+            "box_path": None if path is None else {"dt": BOX_PATH_DT, "xy": np.asarray(path, dtype=float).tolist()},
+            "contact": best.get("contact"),
             "interrupted": result.interrupted, "message": result.message,
             "settings": problem_to_dict(result.problem),
             "optimizer": {"method": result.method, "seed": result.seed, "maxiter": result.maxiter,
                           "iterations": result.iterations, "rollouts": len(result.history), **result.options},
             "code": code_version(), "wall_time": result.wall_time,
             "impacts": impact_comparison(result),
-            **({"transfer": result.transfer} if result.transfer is not None else {}), "history": result.history}
+            **({"transfer": result.transfer} if result.transfer is not None else {}),
+            "history": [{k: v for k, v in e.items() if k != "box_path"} for e in result.history]}
 
 
 def impact_comparison(result) -> dict | None:
@@ -281,6 +285,15 @@ def load_result(path: str) -> dict:
                 t[k] is None or (is_number(t[k]) and np.isfinite(t[k])) for k in TRANSFER_KEYS):
             raise ShootingError(f"{path}: malformed 'transfer': expected {{{', '.join(TRANSFER_KEYS)}}} "
                                 f"as finite numbers (or null where the check failed), got {t!r}")
+    if record.get("box_path") is not None:
+        try:
+            xy = np.asarray(record["box_path"]["xy"], dtype=float)
+        except (TypeError, KeyError, IndexError, ValueError):
+            xy = np.zeros((0, 0))
+        if xy.ndim != 2 or xy.shape[1:] != (2,) or len(xy) < 2 or not np.all(np.isfinite(xy)):
+            raise ShootingError(f"{path}: malformed 'box_path': expected {{'dt': seconds, 'xy': [[x, y], ...]}} "
+                                "with at least two finite points")
+        record["box_path"] = {"dt": record["box_path"].get("dt"), "xy": xy}
     record["problem"] = problem
     return record
 

@@ -434,17 +434,28 @@ def _optimum_paths(directory: str, gaits) -> list[str]:
 
 
 def _replays_submit(executor, directory: str, gaits, cache_dir: str) -> list:
-    """Futures of the optima's replays (``_replayed_box_path``) on ``executor``, for those not yet cached."""
+    """Futures of the optima's replays (``_replayed_box_path``) on ``executor``, for those that did
+    not record their box path and are not yet cached."""
     if not os.path.isdir(directory):
         return []
     return [executor.submit(_replayed_box_path, p, cache_dir) for p in _optimum_paths(directory, gaits)
-            if not os.path.isfile(_replay_cache(p, cache_dir))]
+            if not _records_box_path(p) and not os.path.isfile(_replay_cache(p, cache_dir))]
+
+
+def _records_box_path(path: str) -> bool:
+    """Whether the params JSON ``path`` holds its optimum's box path (then no replay is needed)."""
+    try:
+        with open(path) as f:
+            return bool(json.load(f).get("box_path"))
+    except (OSError, ValueError, AttributeError):
+        return False  # the figure's load_result reports what is wrong with it
 
 
 def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, progress: bool,
                           replays=None) -> list[str]:
     """``fig_optimization`` (one optimum per gait) and ``fig_directions`` (``DIRECTIONS``) from the
-    params JSONs in ``directory``; each optimum is replayed once and its box path cached.
+    params JSONs in ``directory``, each with the box path its optimization recorded; a JSON
+    without one (written before ``box_path`` was kept) is replayed once and its path cached.
     ``replays``: futures of replays already started (``_replays_submit``); an optimum whose replay
     is not cached is replayed here."""
     from .figures.fig_optimization import make
@@ -454,8 +465,9 @@ def _optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, p
         out = []
         for label, gait, path in names:
             if os.path.isfile(path):
-                out.append({"label": label, "gait": gait, "record": load_result(path),
-                            "box_xy": _replayed_box_path(path, cache_dir)})
+                record = load_result(path)
+                xy = record["box_path"]["xy"] if record.get("box_path") else _replayed_box_path(path, cache_dir)
+                out.append({"label": label, "gait": gait, "record": record, "box_xy": xy})
         return out
 
     t0 = time.perf_counter()
