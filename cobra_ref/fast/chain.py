@@ -25,6 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..model import Model, ModelError
+from ..quaternion import quat_to_rot
 from ..spatial import skew, skew_rows
 
 _AXIS = {"Rx": 0, "Ry": 1, "Rz": 2}
@@ -166,11 +167,7 @@ class ChainModel:
         R = np.empty((self.nb, 3, 3))
         for i, start, n in self.pose_plan:
             if n < 0:
-                # quaternion.quat_to_rot, written straight into R (the same Python float arithmetic)
-                w, x, y, z = q[start + 3:start + 7].tolist()
-                R[i] = ((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
-                        (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
-                        (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)))
+                R[i] = quat_to_rot(q[start + 3:start + 7])
             else:
                 # R_parent @ R_rel: np.dot makes the same BLAS call (dgemm) as matmul, with less overhead
                 np.dot(R[i - 1], R_rel[n], out=R[i])

@@ -48,8 +48,10 @@ class FastStepper:
         self.chain = ChainModel(model)
         self.joints = joint_coordinates(model)
         prescribed = settings.servo == "prescribed"
-        self.free = np.setdiff1d(np.arange(model.nv), self.joints.v) if prescribed else np.arange(model.nv)
-        self.prescribed = np.setdiff1d(np.arange(model.nv), self.free)
+        # the free coordinates F and the prescribed P; with none prescribed F selects every row as a
+        # view (slice), so the step indexes M, h and J by F without copying them
+        self.free = np.setdiff1d(np.arange(model.nv), self.joints.v) if prescribed else slice(None)
+        self.prescribed = np.setdiff1d(np.arange(model.nv), self.free) if prescribed else np.zeros(0, dtype=int)
         self.servo_J = np.zeros((0, model.nv)) if prescribed else np.eye(model.nv)[self.joints.v]
         self.qp = FastBoxQP()
         self.memory = None
@@ -78,22 +80,16 @@ class FastStepper:
         q_ref, qd_ref, _ = _reference(reference, t + dt)  # the joints' reference at the end of the step
         if s.servo == "prescribed":
             qd_next[self.joints.v] = (q_ref - q[self.joints.q]) / dt
-        if len(P):
-            M_F = M[F]
-            L = _cholesky(M_F[:, F])
-            rhs = dt * (tau_ext - h)[F] - M_F[:, P] @ (qd_next[P] - qd[P])
-            qd_next[F] = qd[F] + _potrs(L, rhs, lower=1)[0]
-        else:
-            # every coordinate free (F = all, P = none): the same numbers without the index copies,
-            # and without subtracting M_FP (qd_next - qd)_P = 0 (x - 0.0 is x)
-            L = _cholesky(M)
-            qd_next = qd + _potrs(L, dt * (tau_ext - h), lower=1)[0]
+        M_F = M[F]
+        L = _cholesky(M_F[:, F])
+        rhs = dt * (tau_ext - h)[F] - M_F[:, P] @ (qd_next[P] - qd[P])
+        qd_next[F] = qd[F] + _potrs(L, rhs, lower=1)[0]
         clock.append(time.perf_counter())
         # Steps 4-5: contacts, J_c, the rows J over F, G = B^T B with B = L^-1 J_F^T
         contacts = find_contacts(model, terms, s.margin)
         J_c = contact_jacobian(self.chain, terms, contacts)
         J = np.concatenate([J_c, self.servo_J])
-        B = _trtrs(L, (J[:, F] if len(P) else J).T, lower=1)[0]
+        B = _trtrs(L, J[:, F].T, lower=1)[0]
         Minv_JT = _trtrs(L, B, lower=1, trans=1)[0]
         G = B.T @ B
         problem = least_action_problem(model, G, J @ qd_next, contacts, q, q_ref, qd_ref, s, self.joints)
@@ -103,10 +99,7 @@ class FastStepper:
         x, info = solve_least_action(problem, warm_start(contacts, self.memory, len(problem.c)), self.qp)
         clock.append(time.perf_counter())
         # Step 7: velocity, torques, energy ledger, position
-        if len(P):
-            qd_next[F] += Minv_JT @ x
-        else:
-            qd_next += Minv_JT @ x
+        qd_next[F] += Minv_JT @ x
         p = x[:3 * contacts.m]
         if s.servo == "prescribed":
             tau = (M @ (qd_next - qd) / dt + h - J_c.T @ p / dt - tau_ext)[self.joints.v]
