@@ -3,6 +3,7 @@ recomputed here by hand from the cached NPZ), the cache is reused, and bad input
 
 import glob
 import json
+import math
 import os
 
 import numpy as np
@@ -95,6 +96,26 @@ def test_claim_verdicts_follow_the_numbers():
     assert verdicts["E"] is False and verdicts["MJ"] is False
     del s["sidewinding"]
     assert {c["id"]: c["holds"] for c in paper_claims(s)}["WB"] is None
+
+
+def test_a_negative_efficiency_slope_ranks_as_the_least_efficient():
+    """E ranks by the slope W_loc / W_box, lower = more efficient, which holds for positive slopes
+    only: 1 / slope is the efficiency. A slope of -685 J/J (the box's work falling while the robot
+    works, as in a sidewinding member that brakes the box) has a negative efficiency, the worst of
+    all, so it must not beat S's 4 J/J: it ranks as +inf, like a run that never works on the box,
+    and the claim still fails when C's positive slope beats S and J."""
+    from cobra_ref.reproduce.claims import inefficiency
+
+    assert inefficiency(4.0) == 4.0 and inefficiency(-685.0) == inefficiency(0.0) == float("inf")
+    assert math.isnan(inefficiency(float("nan")))
+    base = {"efficiency_slope": 15.0, "box_work": 1.0, "locomotion_work": 5.0, "peak_abs_power": 3.0,
+            "box_distance": 0.1, "box_displacement": [0.1, 0.0], "error": ""}
+    s = {g: dict(base) for g in ("C", "S", "J", "J-mirror", "sidewinding")}
+    s["S"]["efficiency_slope"], s["J"]["efficiency_slope"] = 4.0, 2.7
+    s["sidewinding"]["efficiency_slope"] = -685.0
+    assert {c["id"]: c["holds"] for c in paper_claims(s)}["E"] is True
+    s["C"]["efficiency_slope"] = 3.0  # C's positive slope beats S's 4
+    assert {c["id"]: c["holds"] for c in paper_claims(s)}["E"] is False
 
 
 @pytest.mark.parametrize("args, message", [

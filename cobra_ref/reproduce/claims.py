@@ -9,6 +9,10 @@ threshold fixed here, before any result (assumption A30):
 * E  "the S and J shape lateral rolling gaits perform more efficiently than other gaits": the
   efficiency slope dW_loc / dW_box (``efficiency_slope``, fig. 6; lower = more efficient) of S
   and of J is below that of C and of sidewinding (per scenario: max(S, J) < min(C, sidewinding)).
+  The slope is an inefficiency only where it is positive: 1 / slope is the efficiency, and a
+  slope <= 0 (the box's work falls as the locomotion work grows over the push: the robot takes
+  energy from the box) has an efficiency <= 0, below every positive one, so it ranks as +inf,
+  as a run that never does work on the box does (``inefficiency``).
   The verdict is "ties" (holds None) when the ensemble spread [min, max] of S or of J, over
   the scenarios evaluated, overlaps that of C or of sidewinding: the ensemble does not resolve
   the ranking, whatever the per-scenario count. (Without overlap every scenario ranks alike.)
@@ -191,17 +195,24 @@ def _rank(ensemble, cid, text, key, winner=SIDEWINDING, largest=True):
     return _entry(cid, text, values, results, failed, reason=f"no scenario with every gait's {key}")
 
 
+def inefficiency(slope: float) -> float:
+    """The E claim's ranking number of an efficiency slope [J/J]: the slope where it is positive,
+    +inf where it is not (an efficiency 1 / slope <= 0, module docstring); nan stays nan."""
+    return slope if not slope <= 0 else float("inf")
+
+
 def _efficiency(ensemble):
     text = ("S and J rolling are more efficient than C and sidewinding: per scenario, max(slope S, J) < "
-            "min(slope C, sidewinding), slope = W_loc / W_box over the push [J/J] (fig. 6); 'ties' when the "
-            "ensemble spreads of S or J and of C or sidewinding overlap")
+            "min(slope C, sidewinding), slope = W_loc / W_box over the push [J/J] (fig. 6; a slope <= 0, the box's "
+            "work falling as the robot works, ranks as +inf); 'ties' when the ensemble spreads of S or J and of C "
+            "or sidewinding overlap")
     better, worse = ("S", "J"), ("C", SIDEWINDING)
     gaits = better + worse
     failed = _failed_runs(ensemble, gaits)
     idx = _scenarios(ensemble, gaits, ["efficiency_slope"])
-    values = {g: _stats([ensemble[g][i]["efficiency_slope"] for i in idx]) for g in gaits if g in ensemble} if idx \
-        else _own_values(ensemble, gaits, "efficiency_slope")
-    slope = {g: [ensemble[g][i]["efficiency_slope"] for i in idx] for g in gaits if g in ensemble}
+    slope = {g: [inefficiency(ensemble[g][i]["efficiency_slope"]) for i in idx] for g in gaits if g in ensemble}
+    values = {g: _stats(v) for g, v in slope.items()} if idx else \
+        _own_values(ensemble, gaits, "efficiency_slope", lambda s: inefficiency(s["efficiency_slope"]))
     results = [max(slope["S"][k], slope["J"][k]) < min(slope["C"][k], slope[SIDEWINDING][k])
                for k in range(len(idx))]
     entry = _entry("E", text, values, results, failed, reason="needs S, J, C and sidewinding")
