@@ -197,7 +197,10 @@ def _rank(ensemble, cid, text, key, winner=SIDEWINDING, largest=True):
 
 def inefficiency(slope: float) -> float:
     """The E claim's ranking number of an efficiency slope [J/J]: the slope where it is positive,
-    +inf where it is not (an efficiency 1 / slope <= 0, module docstring); nan stays nan."""
+    +inf where it is not (an efficiency 1 / slope <= 0, module docstring); nan stays nan.
+
+    Helper: claim E's per-member comparison and its spreads.
+    """
     return slope if not slope <= 0 else float("inf")
 
 
