@@ -550,3 +550,35 @@ def test_figures_reoptimize_writes_one_params_json_per_gait_and_direction(tmp_pa
         assert record["transfer"]["check_dt"] == 5e-4 and record["transfer"]["check_error"] is None
     assert regenerate.optimized_files(str(tmp_path), ("C", "S")) == {"C": files["C"]}
     assert set(regenerate.optimized_params({"C": files["C"]})["C"]) >= {"amplitude", "frequency"}
+
+
+def test_candidates_with_the_same_start_shape_share_one_settle_bit_for_bit(monkeypatch):
+    """The settled start depends on a candidate only through its t = 0 shape; a change of frequency
+    leaves that shape alone (the gaits' t = 0 angles do not depend on it), so start_state settles
+    once for both (one call of initial_state) and returns exactly what a fresh settle gives; a change
+    of amplitude changes the shape and settles again. The copies it returns are the caller's own."""
+    from cobra_ref.planning import problem as problem_module
+
+    problem = tiny_problem(decision=("amplitude", "frequency"), bounds={"amplitude": (0.25, 0.75), "frequency": (0.5, 1.5)})
+    x = np.asarray(problem.x0, dtype=float)
+    faster = x.copy()
+    faster[list(problem.names).index("frequency")] += 0.1
+    wider = x.copy()
+    wider[list(problem.names).index("amplitude")] += 0.05
+    problem_module._SETTLED.clear()
+    fresh = [sh.start_state(problem, p) for p in (x, faster, wider)]  # the first call of each shape settles
+    calls = []
+    original = problem_module.initial_state
+    monkeypatch.setattr(problem_module, "initial_state", lambda *a, **k: calls.append(1) or original(*a, **k))
+    problem_module._SETTLED.clear()
+    q_x, qd_x = sh.start_state(problem, x)
+    q_x[:] = np.nan  # the caller's copy: the stored start is untouched
+    q_f, qd_f = sh.start_state(problem, faster)
+    assert len(calls) == 1
+    np.testing.assert_array_equal(q_f, fresh[1][0])
+    np.testing.assert_array_equal(qd_f, fresh[1][1])
+    np.testing.assert_array_equal(sh.start_state(problem, x)[0], fresh[0][0])
+    q_w, _ = sh.start_state(problem, wider)
+    assert len(calls) == 2
+    np.testing.assert_array_equal(q_w, fresh[2][0])
+    assert not np.array_equal(q_w, q_f)
