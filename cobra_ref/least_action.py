@@ -28,7 +28,8 @@ or inside the circle, is the minimiser over the circle. The loop::
     repeat:  x <- the box QP with (pbar_N, theta), from x      (OSQP)
              stop if the natural residual of x is below FP_TOL max(max p_N, impulse_floor)
              (pbar_N, theta, x) <- guess(x)
-             from iterate FP_RELAX_AFTER on: pbar_N <- (pbar_N_last + pbar_N) / 2
+             from iterate FP_RELAX_AFTER on: pbar_N <- (pbar_N_last + pbar_N) / 2,
+                 e(theta) <- the direction of e(theta_last) + e(theta)
 
 ``guess`` solves the exact conditions of Coulomb's law on the active set of x (which contacts
 are released, which stick, which slide, which servo rows saturate) by Newton's method
@@ -43,7 +44,11 @@ between two guesses whose residuals stay at 0.48 and 0.61 for all 50 iterates, N
 failing on both. From iterate ``FP_RELAX_AFTER`` on, each new guess is therefore averaged with
 the last one, pbar_N <- (pbar_N_last + pbar_N) / 2 (a Krasnosel'skii-Mann step, which turns a
 2-cycle into a contraction towards its midpoint): that step then converges at iterate 30. The
-paper's runs converge within 4 iterates, so the averaging never acts on them. The natural residual of Coulomb's law::
+friction directions are averaged too (``mean_angle``): on a step of scenario 42 (S, a 0.11 kg box
+wedged against the ground, mu = 1.38, 17 contacts) the normal impulses alone averaged, the
+guesses still alternate with residuals 0.152 and 0.161 for 1000 iterates; with the directions
+averaged as well the step converges at iterate 25. The paper's runs converge within 4 iterates,
+so the averaging never acts on them. The natural residual of Coulomb's law::
 
     max_i max( |p_N,i - pbar_N,i|,  |p_T,i - P_{mu_i p_N,i}(z_i)| )        (P_r: onto the disk r)
 
@@ -67,7 +72,7 @@ from .qp import solve_box_qp
 
 FP_TOL = 1e-6  # natural residual of Coulomb's law, relative to max p_N
 FP_MAX = 50  # friction fixed-point iterates per step
-FP_RELAX_AFTER = 10  # from this iterate on, each new guess of pbar_N is averaged with the last one
+FP_RELAX_AFTER = 10  # from this iterate on, each new guess (pbar_N, theta) is averaged with the last one
 NEWTON_MAX_GROWTH = 3.0  # a Newton guess may at most triple the sum of the normal impulses
 RELEASED = 1e-9  # a contact whose normal impulse is below RELEASED max p_N carries nothing
 NEWTON_TOL = 1e-6  # Newton's iterations stop when a step changes no impulse by more than this (relative)
@@ -137,14 +142,26 @@ def solve_least_action(problem: LeastAction, x_start=None, solve_qp=solve_box_qp
         residual = natural_residual(p_N, p_T, z, pbar_N, problem.mu, floor)
         if residual <= tol:
             break
-        last = pbar_N
+        last, last_theta = pbar_N, theta
         pbar_N, theta, x = guess(problem, x, theta)
         # a loop that has not converged by now cycles (the plain update can alternate between two
-        # guesses): average, pbar_N <- (pbar_N_last + pbar_N) / 2 (Krasnosel'skii-Mann)
+        # guesses): average the guess with the last one (Krasnosel'skii-Mann), the normal impulses
+        # pbar_N <- (pbar_N_last + pbar_N) / 2 and each friction direction e(theta) <- the
+        # direction of e(theta_last) + e(theta) (kept as it is where the two are opposite)
         if k >= FP_RELAX_AFTER:
             pbar_N = 0.5 * (last + pbar_N)
+            theta = mean_angle(last_theta, theta)
     return project_friction(x, problem.mu), LeastActionInfo(residual <= tol, k, qp_iterations, qp_solves,
                                                             residual, sol.status)
+
+
+def mean_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The direction of e(a) + e(b), e(t) = (cos t, sin t), elementwise; b where e(a) = -e(b).
+
+    Helper: the averaged friction directions of the fixed point's relaxed update.
+    """
+    s, c = np.sin(a) + np.sin(b), np.cos(a) + np.cos(b)
+    return np.where(np.hypot(s, c) > 1e-12, np.arctan2(s, c), b)
 
 
 def hessian(problem: LeastAction, pbar_N: np.ndarray, R_T=None) -> np.ndarray:

@@ -282,6 +282,29 @@ def test_a_cycling_friction_fixed_point_converges_once_its_guesses_are_averaged(
     assert not info.converged and info.residual > 0.1, info
 
 
+def test_a_fixed_point_whose_friction_directions_cycle_converges_once_they_are_averaged_too(monkeypatch):
+    """One step of the reliability sweep (scenario 42: S, position servo, a 0.11 kg box pressed
+    against the ground by two links, mu = 1.38, 17 contacts; tests/data/wedge_two_cycle_step.npz).
+    Averaging the normal impulses alone does not stop its cycle: the guesses alternate with
+    residuals 0.152 and 0.161 (measured for 1000 iterates). Averaging each friction direction
+    with the last one as well (``mean_angle``), it converges within FP_MAX and the answer meets
+    Coulomb's law (kkt_residuals' natural residual below 1e-5)."""
+    from pathlib import Path
+
+    from cobra_ref import least_action
+
+    assert np.allclose(least_action.mean_angle(np.array([0.1, 3.0, 0.5]), np.array([0.3, -3.0, 0.5 + np.pi])),
+                       [0.2, np.pi, 0.5 + np.pi])  # the mean direction; across +-pi; opposite: the new one
+    data = np.load(Path(__file__).parent / "data" / "wedge_two_cycle_step.npz")
+    problem = LeastAction(data["H"], data["c"], data["mu"], data["lo"], data["hi"], float(data["v_s"]))
+    x, info = solve_least_action(problem, data["x0"])
+    assert info.converged and least_action.FP_RELAX_AFTER < info.iterations <= least_action.FP_MAX, info
+    assert kkt_residuals(problem, x)["coulomb_residual"] < 1e-5
+    monkeypatch.setattr(least_action, "mean_angle", lambda a, b: b)  # the normal impulses averaged alone
+    _, info = solve_least_action(problem, data["x0"], max_iter=200)
+    assert not info.converged and info.residual > 0.1, info
+
+
 def test_a_step_whose_contacts_all_hover_converges_at_its_first_iterate(monkeypatch):
     """One step of the reliability sweep (scenario 22: J, mu = 1.47, 14 candidate contacts, the
     robot in the air; stored in tests/data/hovering_step.npz): every contact separates (c_N > 0),
