@@ -19,6 +19,7 @@ import pytest
 from cobra_ref import planning as sh
 from cobra_ref.cli.optimize import add_parsers
 from cobra_ref.cli.simulate import cmd_simulate_params
+from cobra_ref.planning.problem import Weights
 from cobra_ref.planning.results import params_reference
 
 GOAL = (0.05, -0.01)
@@ -211,7 +212,6 @@ def test_committed_optima_load_and_replay():
     at its default weight, carries a transfer record whose plan numbers are its optimum's, and
     replays: 0.2 s of the C optimum from its recorded start, the box at its recorded pose, the
     joint torques within tau_max (the position servo)."""
-    from cobra_ref.planning.problem import Weights
     from cobra_ref.reproduce.regenerate import DIRECTIONS, OPTIMIZED_DIR
     from cobra_ref.simulate import simulate
 
@@ -284,6 +284,7 @@ def test_the_companion_search_keeps_the_optimum_from_having_more_impacts_than_th
         return {"params": {"frequency": float(x[0])}, "error": None, "cost": G + 10 * I, "box_distance_to_goal": 0.0,
                 "terms": {"impact": I}, "contact": {"impact_impulse": I * 58.86 * problem.duration}}
 
+    problem = dataclasses.replace(problem, weights=Weights(impact=10.0))  # the weight the landscape is made for
     monkeypatch.setattr(search, "evaluate", made_up)
     alone = sh.optimize(problem, maxiter=6, executor=sh.SerialExecutor(), companion=False)
     assert alone.best["params"]["frequency"] == 0.5 and alone.best["terms"]["impact"] == 0.05

@@ -11,7 +11,7 @@ import sys
 import numpy as np
 
 from ..executors import SerialExecutor
-from ..planning.problem import DECISION, DEFAULTS, RAMP_TIME, ShootingError, make_problem
+from ..planning.problem import DECISION, DEFAULTS, RAMP_TIME, ShootingError, Weights, make_problem
 from ..planning.results import summary_lines, write_result
 from ..planning.search import optimize
 from ..validation import RULES
@@ -39,13 +39,15 @@ def add_parsers(sub) -> None:
 
     Helper: the command line (cobra-ref optimize).
     """
+    w = Weights()
     goals = "; ".join(f"{g} {x:g},{y:g} in {T:g} s, {n} iterations" for g, ((x, y), T, n) in DEFAULTS.items())
     p = sub.add_parser(
         "optimize", help="single shooting: gait parameters that push the box to a goal with least torque",
         description="Single shooting ([COBRA] 'shooting method to find optimal u_ref'): optimise a gait's "
                     "parameters so that a rollout of DURATION seconds pushes the box to the goal with the least "
-                    "joint torque and the fewest impacts (cost = mean squared torque / tau_max^2 + 10 (distance "
-                    "to goal / start distance)^2 + 10 impact impulse / (robot weight x DURATION) + torque and "
+                    "joint torque and the fewest impacts (cost = mean squared torque / tau_max^2 + "
+                    f"{w.goal:g} (distance to goal / start distance)^2 + {w.impact:g} impact impulse / (robot weight "
+                    "x DURATION) + torque and "
                     "joint-limit penalties; see cobra_ref/planning/). One progress "
                     "line per iteration and a summary on stderr, one JSON line on stdout; OUT holds the optimum "
                     "('params'), every rollout ('history') and every setting; 'cobra-ref simulate --params OUT' "
