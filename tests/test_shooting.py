@@ -155,7 +155,7 @@ def test_robot_weight_is_twelve_half_kilogram_bodies():
 def test_impact_term_is_zero_without_impacts_and_the_hand_computed_value_for_a_made_up_rollout():
     """Worked example: the box ends on the goal and no torque acts, so J = w_I I. Without impacts
     I = 0 and J = 0. With three impacts of a 0.5 kg link landing at 0.2 m/s (m v_a = 0.1 N s each)
-    over T = 1.5 s: I = 0.3 N s / (58.86 N * 1.5 s) = 0.3 / 88.29 = 0.00339789, J = 10 I = 0.0339789"""
+    over T = 1.5 s: I = 0.3 N s / (58.86 N * 1.5 s) = 0.3 / 88.29 = 0.00339789, J = 100 I = 0.339789"""
     from cobra_ref.planning.cost import shooting_cost
 
     problem = dataclasses.replace(tiny_problem(), duration=1.5)
@@ -165,8 +165,8 @@ def test_impact_term_is_zero_without_impacts_and_the_hand_computed_value_for_a_m
     hits = shooting_cost(problem, made_up_trajectory(problem, [0.1, 0.2, 0.0], goal))
     assert hits["terms"]["impact"] == pytest.approx(0.3 / (58.86 * 1.5), rel=1e-12)
     assert hits["terms"]["impact"] == pytest.approx(0.0033978933, rel=1e-8)
-    assert problem.weights.impact == 10.0
-    assert hits["cost"] == pytest.approx(10 * 0.3 / (58.86 * 1.5), rel=1e-12)
+    assert problem.weights.impact == 100.0
+    assert hits["cost"] == pytest.approx(0.339789, rel=1e-6)
     unweighted = dataclasses.replace(problem, weights=sh.problem.Weights(impact=0.0))
     assert shooting_cost(unweighted, made_up_trajectory(problem, [0.1, 0.2, 0.0], goal))["cost"] == 0.0
 
@@ -209,8 +209,9 @@ def test_transfer_record_is_written_and_read_back(serial_result, problem, tmp_pa
 
 def test_committed_optima_load_and_replay():
     """Every committed optimum (cobra_ref/optimized/*.json) loads, was found with the impact term
-    at its default weight, carries a transfer record whose plan numbers are its optimum's, and
-    replays: 0.2 s of the C optimum from its recorded start, the box at its recorded pose, the
+    at its default weight, has a lower impact impulse per second than its companion search's
+    optimum without the term (another rollout: the term steered the planner), carries a transfer
+    record whose plan numbers are its optimum's, and replays: 0.2 s of the C optimum from its recorded start, the box at its recorded pose, the
     joint torques within tau_max (the position servo)."""
     from cobra_ref.reproduce.regenerate import DIRECTIONS, OPTIMIZED_DIR
     from cobra_ref.simulate import simulate
@@ -221,6 +222,9 @@ def test_committed_optima_load_and_replay():
         record = sh.load_result(path)
         assert record["problem"].weights == Weights(), name
         assert not record["interrupted"], name
+        impacts = record["impacts"]
+        assert not impacts["same"] and impacts["lower"], name
+        assert impacts["optimum"]["impact_impulse_per_s"] < impacts["without_impact_term"]["impact_impulse_per_s"], name
         t = record["transfer"]
         assert t["check_error"] is None and t["check_dt"] == 5e-4, name
         assert t["plan_distance_to_goal"] == record["box_distance_to_goal"], name

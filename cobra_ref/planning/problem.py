@@ -136,7 +136,7 @@ class Weights:
     (docs/planning.md). Measured on the initial guesses (1.5 s, the compliant contact law and the
     position servo at dt 1 ms): C I = 0.00064 (3 impacts, 0.037 N s/s), S 0.0020 (9 impacts,
     0.12 N s/s), J and J-mirror 0.0145 (17 impacts, 0.85 N s/s); over C's first 19 rollouts
-    0.0003-0.0026; sidewinding (3 s, its box ahead of the wave) 0.047 (46 impacts, 2.76 N s/s).
+    0.0003-0.0026; sidewinding (3 s, its box ahead of the wave) 0.049 (63 impacts, 2.87 N s/s).
     """
 
     effort: float = 1.0
