@@ -166,7 +166,7 @@ def test_impact_term_is_zero_without_impacts_and_the_hand_computed_value_for_a_m
     assert hits["terms"]["impact"] == pytest.approx(0.3 / (58.86 * 1.5), rel=1e-12)
     assert hits["terms"]["impact"] == pytest.approx(0.0033978933, rel=1e-8)
     assert problem.weights.impact == 100.0
-    assert hits["cost"] == pytest.approx(0.339789, rel=1e-6)
+    assert hits["cost"] == pytest.approx(100 * 0.3 / (58.86 * 1.5), rel=1e-12)
     unweighted = dataclasses.replace(problem, weights=sh.problem.Weights(impact=0.0))
     assert shooting_cost(unweighted, made_up_trajectory(problem, [0.1, 0.2, 0.0], goal))["cost"] == 0.0
 
@@ -211,8 +211,9 @@ def test_committed_optima_load_and_replay():
     """Every committed optimum (cobra_ref/optimized/*.json) loads, was found with the impact term
     at its default weight, has a lower impact impulse per second than its companion search's
     optimum without the term (another rollout: the term steered the planner), carries a transfer
-    record whose plan numbers are its optimum's, and replays: 0.2 s of the C optimum from its recorded start, the box at its recorded pose, the
-    joint torques within tau_max (the position servo)."""
+    record whose plan numbers are its optimum's, and replays: 0.2 s of the C optimum from its
+    recorded start, the box at its recorded pose, the joint torques within tau_max (the position
+    servo)."""
     from cobra_ref.reproduce.regenerate import DIRECTIONS, OPTIMIZED_DIR
     from cobra_ref.simulate import simulate
 
