@@ -28,7 +28,20 @@ damping the step adds, theta k dt = max(0, k dt - d), is none at dt <= d / k and
 much as is needed above. For every mass the step is stable at every dt: the spring-damper's
 map (g, w) -> (g+, w+) has its eigenvalues inside the unit circle when
 k dt^2 (1 - 2 theta) < 4 m_c + 2 d dt, which this theta meets (tests/test_compliance.py).
-The servo rows keep theta = 1 (their kp dt = 0.5 N m s/rad is a tenth of kd at 1 ms).
+The servo rows (``servo_rows``) are the same spring-damper on a joint's error, written so that
+the step tracks a reference to second order in dt. The position update q+ = q + dt qd+ makes qd+
+the velocity at the step's midpoint (the staggered, leapfrog reading of the step), so a force
+centred on the step's start is second order: the spring acts on the error at the step's start,
+e = q - q_ref(t) (theta from ``contact_theta(kp, kd, dt)``: 0 for dt <= kd / kp = 10 ms), and the
+damper on the mean rate theta_d qd+ + (1 - theta_d) qd against qd_ref(t), with
+theta_d = max(1/2, 1 - I / (kd dt)) (``servo_theta``; I = 1 / G_ii, the inertia the joint's row
+sees). theta_d = 1/2 is the trapezoidal damper; on a light joint (I < kd dt / 2: the head's and
+the tail's at 1 ms) the damper leans towards qd+ just as far as keeps the step from flipping the
+error's sign, the servo's counterpart of the contact's rule. As dt -> 0 every joint has
+theta_d -> 1/2 and theta -> 0, and on one servoed joint tracking a sine the error falls by four
+per halving of dt (tests/test_servo.py). The step is stable for every I at every dt: the map of
+(e, dt qd) has its eigenvalues inside the unit circle when
+kp dt^2 (1 - 2 theta) < 4 I + 2 (2 theta_d - 1) kd dt, which these thetas meet.
 
 The rows (assumption ids refer to ``docs/assumptions.md``):
 
@@ -43,8 +56,9 @@ The rows (assumption ids refer to ``docs/assumptions.md``):
   whose sticking branch f_T = -(mu f_N / v_s) v_T is the row compliance R = v_s / (mu pbar_N)
   (pbar_N: the normal impulse of the friction fixed point, :mod:`cobra_ref.least_action`);
   rigid: R = ``RIGID_COMPLIANCE`` G_ii;
-* joint servo (A7): tau = kp (q_ref - q) + kd (qd_ref - qd) at the end of the step, on the
-  joint's error e = q - q_ref with v_ref = qd_ref, its impulse bounded by tau_max dt.
+* joint servo (A7): tau = kp (q_ref - q) + kd (qd_ref - qd), the spring at the step's start and
+  the damper on the mean rate (above), both against the reference at the step's start, its
+  impulse bounded by tau_max dt.
 """
 
 from __future__ import annotations
@@ -119,11 +133,31 @@ def stick_slip_compliance(v_s: float, bound: np.ndarray, G_TT: np.ndarray) -> np
     return np.where(loaded, np.minimum(v_s / np.where(loaded, bound, 1.0), STICK_SLIP_MAX * G_TT), 0.0)
 
 
-def servo_rows(model, q_joint, q_ref, qd_ref, dt: float):
+def servo_theta(G_ss, kp: float, kd: float, dt: float):
+    """(theta, theta_d) of the servo rows: where the spring is evaluated, contact_theta(kp, kd, dt),
+    and the damper's weight on qd+, theta_d = max(1/2, 1 - I / (kd dt)), I = 1 / G_ss (n,).
+
+    Implements: the module docstring's servo step (assumption A7): second order as dt -> 0, and
+    the error's factor over a step of a light joint, 1 - (1 - theta_d) kd dt / I, never negative.
+    """
+    inertia = 1.0 / np.asarray(G_ss, dtype=float)
+    if kd <= 0.0:  # no damper: nothing to weigh
+        return contact_theta(kp, kd, dt), np.full_like(inertia, 0.5)
+    return contact_theta(kp, kd, dt), np.maximum(0.5, 1.0 - inertia / (kd * dt))
+
+
+def servo_rows(model, q_joint, qd_joint, q_ref, qd_ref, G_ss, dt: float):
     """(R_s, b_s): compliance and offset of the joints' servo rows (position control).
 
     Implements: the position-controlled revolute joint of [COBRA] sec. "Simulation Setup"
-    (assumption A7): tau = kp (q_ref - q) + kd (qd_ref - qd) at the end of the step, as the
-    spring-damper row on e = q - q_ref with v_ref = qd_ref (the reference is taken at t + dt).
+    (assumption A7), tau = kp (q_ref - q) + kd (qd_ref - qd), over the step as
+    f = -kp (e + theta dt w) - kd (theta_d w + (1 - theta_d) qd - qd_ref) with e = q - q_ref, w the
+    joint rate after the step, (q_ref, qd_ref) the reference at the step's start and
+    (theta, theta_d) = ``servo_theta``: the row law of ``spring_damper`` with d = theta_d kd and
+    v_ref = (qd_ref - (1 - theta_d) qd) / theta_d. ``G_ss``: the rows' diagonal of the Delassus
+    matrix.
     """
-    return spring_damper(model.servo_kp, model.servo_kd, dt, q_joint - q_ref, qd_ref)
+    kp, kd = model.servo_kp, model.servo_kd
+    theta, theta_d = servo_theta(G_ss, kp, kd, dt)
+    v_ref = (np.asarray(qd_ref, dtype=float) - (1.0 - theta_d) * np.asarray(qd_joint, dtype=float)) / theta_d
+    return spring_damper(kp, theta_d * kd, dt, np.asarray(q_joint, dtype=float) - q_ref, v_ref, theta)

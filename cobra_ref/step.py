@@ -11,8 +11,9 @@ Implements: [COBRA] eq. (1)-(6) over one step dt, at the velocity level (semi-im
    velocity-product terms at the step's midpoint velocity w, extrapolated from the last step
    (``midpoint_velocity``);
 2. the joints (``StepSettings.servo``): ``"position"``, the paper's position-controlled joints:
-   every coordinate is free and each joint gets a servo row whose impulse is bounded by
-   tau_max dt (:func:`cobra_ref.compliance.servo_rows`); or ``"prescribed"`` (Simscape's
+   every coordinate is free and each joint gets a servo row towards the reference at the step's
+   start, its impulse bounded by tau_max dt (:func:`cobra_ref.compliance.servo_rows`); or
+   ``"prescribed"`` (Simscape's
    "motion provided"): each joint's qd+ is the secant to the reference, (q_ref(t + dt) - q) / dt,
    and only the base and the box are free (F); the torques are recovered from eq. (1);
 3. eq. (1) without impulses: qd_free over the free coordinates;
@@ -113,6 +114,7 @@ def step(model: Model, q, qd, t: float, reference, settings: StepSettings = Step
     dt, joints = settings.dt, joint_coordinates(model)
     tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
     q_ref, qd_ref, _ = _reference(reference, t + dt)  # the joints' reference at the end of the step
+    servo_ref = _reference(reference, t)[:2] if settings.servo == "position" else None  # ... and at its start
     # Step 1: eq. (1), M(q) and h(q, qd)
     kin = forward_kinematics(model, q)
     M, h = crba(model, q), bias_force(model, q, midpoint_velocity(qd, previous))
@@ -133,7 +135,7 @@ def step(model: Model, q, qd, t: float, reference, settings: StepSettings = Step
     # Step 5: eq. (5), the rows J over F, the Delassus matrix G and the least-action problem
     J = np.vstack([J_c, _servo_jacobian(model, joints, settings)])
     G, Minv_JT = delassus(J[:, F], M[np.ix_(F, F)])
-    problem = least_action_problem(model, G, J @ qd_next, contacts, q, q_ref, qd_ref, settings, joints)
+    problem = least_action_problem(model, G, J @ qd_next, contacts, q, qd, servo_ref, settings, joints)
     # Step 6: eq. (6), the impulses, starting from the previous step's
     x, info = solve_least_action(problem, warm_start(contacts, previous, len(problem.c)))
     # Step 7: the velocity after the step, the joint torques, the position
@@ -181,14 +183,15 @@ def _servo_jacobian(model: Model, joints: JointCoordinates, settings: StepSettin
     return np.eye(model.nv)[joints.v]
 
 
-def least_action_problem(model: Model, G, c_free, contacts: Contacts, q, q_ref, qd_ref, settings: StepSettings,
+def least_action_problem(model: Model, G, c_free, contacts: Contacts, q, qd, servo_ref, settings: StepSettings,
                          joints: JointCoordinates) -> LeastAction:
     """The least-action problem of eq. (6): H = G + R and c = J qd_free + b over the rows.
 
     Implements: [COBRA] eq. (5)-(6) with each row's compliance R and offset b
     (:mod:`cobra_ref.compliance`): contact normals and friction under ``settings.contact``,
-    then the servo rows (position servo, towards q_ref and qd_ref, the reference at the step's
-    end), bounded by tau_max dt; ``joints``: the model's ``joint_coordinates``.
+    then the servo rows (position servo, from the step's start (q, qd) towards
+    ``servo_ref`` = (q_ref, qd_ref), the reference at the step's start; None for prescribed
+    joints), bounded by tau_max dt; ``joints``: the model's ``joint_coordinates``.
     """
     m, dt, law = contacts.m, settings.dt, settings.contact
     d = np.diag(G)
@@ -199,7 +202,7 @@ def least_action_problem(model: Model, G, c_free, contacts: Contacts, q, q_ref, 
     R[2:3 * m:3] = compliance.tangential_compliance(d[2:3 * m:3], law)
     lo = hi = np.zeros(0)
     if settings.servo == "position":
-        R[3 * m:], b[3 * m:] = compliance.servo_rows(model, q[joints.q], q_ref, qd_ref, dt)
+        R[3 * m:], b[3 * m:] = compliance.servo_rows(model, q[joints.q], qd[joints.v], *servo_ref, d[3 * m:], dt)
         lo, hi = -joints.tau_max * dt, joints.tau_max * dt
     # each contact's coefficient of friction, looked up by its kind
     mu_of_kind = np.empty(3)

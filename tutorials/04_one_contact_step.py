@@ -333,25 +333,30 @@ joints = joint_coordinates(model)
 J = np.vstack([J_c, np.eye(model.nv)[joints.v]])
 G, Minv_JT = delassus(J, M)
 print(f"J: {J.shape}, G: {G.shape}, rank G = {np.linalg.matrix_rank(G)}")
-q_ref, qd_ref, _ = ref(dt)  # the joints' reference at the end of the step
-problem = least_action_problem(model, G, J @ u_free, contacts, q, q_ref, qd_ref, settings, joints)
+q_ref, qd_ref, _ = ref(0.0)  # the joints' reference at the step's start, which the servo follows
+problem = least_action_problem(model, G, J @ u_free, contacts, q, qd, (q_ref, qd_ref), settings, joints)
 R_rows, b_rows = np.diag(problem.H - G), problem.c - J @ u_free
 
 # %% [markdown]
 # Each row's R and b, by hand: the normal rows are the spring-damper of section 4 on the gap;
-# the servo rows are the same spring-damper on the joint error `e = q - q_ref(t + dt)` with
-# `kp, kd` and the target rate `qd_ref`: `R = 1 / (dt (kp dt + kd))`, `b = (kp e - kd qd_ref) /
-# (kp dt + kd)` (assumption A7), and the servo's impulse is bounded by `tau_max dt`. The
-# friction rows get their compliance from the stick-slip law inside the fixed point.
+# the servo rows are the same spring-damper on the joint error at the step's start,
+# `e = q - q_ref(t)`, with `kp, kd`: the spring at the start (theta = 0 at 1 ms) and the damper on
+# the mean rate `theta_d u+ + (1 - theta_d) u` against `qd_ref(t)`, with
+# `theta_d = max(1/2, 1 - I / (kd dt))` and `I = 1 / G_ii` the inertia the joint's row sees:
+# `R = 1 / (dt theta_d kd)`, `b = (kp e + (1 - theta_d) kd u - kd qd_ref) / (theta_d kd)`
+# (assumption A7), and the servo's impulse is bounded by `tau_max dt`. The friction rows get
+# their compliance from the stick-slip law inside the fixed point.
 
 # %%
 theta = compliance.contact_theta(k, d, dt)
 R_N_hand, b_N_hand = 1 / (dt * (theta * k * dt + d)), k * contacts.g / (theta * k * dt + d)
 kp, kd = model.servo_kp, model.servo_kd
-R_s_hand, b_s_hand = 1 / (dt * (kp * dt + kd)), (kp * (q[joints.q] - q_ref) - kd * qd_ref) / (kp * dt + kd)
+theta_d = np.maximum(0.5, 1 - 1 / (np.diag(G)[3 * contacts.m:] * kd * dt))
+R_s_hand = 1 / (dt * theta_d * kd)
+b_s_hand = (kp * (q[joints.q] - q_ref) + (1 - theta_d) * kd * qd[joints.v] - kd * qd_ref) / (theta_d * kd)
 n_c = 3 * contacts.m
 print("normal rows: R", R_rows[0:n_c:3][:2], "... by hand", R_N_hand, "| b [m/s]", b_rows[0:n_c:3][:3], "...")
-print("servo rows : R", R_rows[n_c:][:2], "... by hand", R_s_hand, "| bounds +-", problem.hi[:2], "N m s ...")
+print("servo rows : R", R_rows[n_c:][:2], "... by hand", R_s_hand[:2], "| bounds +-", problem.hi[:2], "N m s ...")
 
 # %% [markdown]
 # **Block 6**: the impulses, with Coulomb's circle by the friction fixed point (section 5).

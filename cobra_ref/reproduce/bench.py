@@ -89,8 +89,8 @@ def mujoco_us_per_step(model, reference, q0, n_steps: int, dt: float) -> float |
     d.qpos[:] = q0
     mujoco.mj_forward(m, d)
     per_step = max(1, int(round(dt / TIMESTEP)))
-    # the controls sampled beforehand (the reference at each step's end), so only mj_step is timed
-    ctrl = [servo_control(model, *reference((k + 1) * TIMESTEP)[:2]) for k in range(n_steps * per_step)]
+    # the controls sampled beforehand (the reference at each step's start), so only mj_step is timed
+    ctrl = [servo_control(model, *reference(k * TIMESTEP)[:2]) for k in range(n_steps * per_step)]
     start = time.perf_counter()
     for u in ctrl:
         d.ctrl[:] = u

@@ -12,7 +12,7 @@ addresses of the compiled model against ``model.q_idx`` / ``model.v_idx`` before
 The servo. MuJoCo's position actuator applies clip(kp (ctrl - q) - kv qd, +-tau_max) ([MJ]
 actuator/position: gainprm = kp, biasprm = (0, -kp, -kv)); with ctrl = q_ref + (kv / kp) qd_ref
 this is kp (q_ref - q) + kv (qd_ref - qd), our servo law (A7, ``servo_control``), with the
-reference taken at the end of the step as ours is (``compliance.servo_rows``).
+reference taken at the step's start as ours is (``compliance.servo_rows``).
 
 Two comparisons, each with its band stated here, before any run:
 
@@ -123,7 +123,7 @@ def rollout(model: Model, reference, q0, duration: float, timestep: float = TIME
     the joints driven by ``reference(t) -> (q_ref, qd_ref, qdd_ref)``.
 
     Implements: the MuJoCo rollout of the module docstring. Per step k, before ``mj_step``,
-    ctrl = ``servo_control``(q_ref(t_k+1), qd_ref(t_k+1)). Raises ``MujocoRolloutError`` when
+    ctrl = ``servo_control``(q_ref(t_k), qd_ref(t_k)). Raises ``MujocoRolloutError`` when
     the state becomes non-finite or MuJoCo reports a bad position, velocity or acceleration.
     """
     mujoco = _import_mujoco()
@@ -144,10 +144,11 @@ def rollout(model: Model, reference, q0, duration: float, timestep: float = TIME
     start = time.perf_counter()
     # the loop does only what needs the live mjData; the statistics come from its records afterwards
     for k in range(n):
-        q_ref, qd_ref, _ = reference(t[k + 1])
+        q_ref, qd_ref, _ = reference(t[k])
         d.ctrl[:] = servo_control(model, q_ref, qd_ref)
         mujoco.mj_step(m, d)
-        qpos[k + 1], forces[k], q_refs[k] = d.qpos, d.actuator_force, q_ref
+        forces[k], q_refs[k] = d.actuator_force, q_ref  # the force over the step from t_k
+        qpos[k + 1] = d.qpos
         # mjContact.dist < 0 is a penetration (the contacts of the step's start state)
         if d.ncon:
             contacts += d.ncon
@@ -155,7 +156,7 @@ def rollout(model: Model, reference, q0, duration: float, timestep: float = TIME
         if (k + 1) % DIVERGENCE_CHECK == 0 or k + 1 == n:
             _check_diverged(mujoco, d, qpos, k, timestep)
     return MujocoRollout(t=t, qpos=qpos, max_penetration=penetration, mean_contacts=contacts / max(n, 1),
-                         max_tracking_error=float(np.abs(qpos[1:, hinge_q] - q_refs).max(initial=0.0)),
+                         max_tracking_error=float(np.abs(qpos[:-1, hinge_q] - q_refs).max(initial=0.0)),
                          max_joint_torque=float(np.abs(forces).max(initial=0.0)),
                          n_warnings=int(sum(w.number for w in d.warning)), wall_time=time.perf_counter() - start)
 
