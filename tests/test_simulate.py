@@ -233,3 +233,33 @@ def test_kinetic_damping_reaches_the_undamped_rest_sooner(monkeypatch):
     assert np.abs(q[3:7] - q_plain[3:7]).max() < 0.01
     assert np.abs(q[:3] - q_plain[:3]).max() < 5e-3
     assert len(steps) < plain_steps / 3, (len(steps), plain_steps)
+
+
+class _StuckQP:
+    """A box-QP solver that answers every QP with the same impulses (1 mN s on every row, within
+    the bounds), whatever H and c: the friction fixed point cannot converge on it."""
+
+    def new_step(self):
+        pass
+
+    def __call__(self, H, c, lo, hi, x0):
+        from cobra_ref.qp import BoxQPSolution
+
+        return BoxQPSolution(np.clip(np.full(len(c), 1e-3), lo, hi), np.zeros(len(c)), 0, "solved", 0)
+
+
+def test_a_step_the_certified_solves_leave_unconverged_is_solved_by_the_reference_loop():
+    """The fast stepper's certified QP solves are an acceleration: where its fixed point ends
+    unconverged (here forced, by a QP solver that never moves), it solves the step again with the
+    reference step's loop, OSQP on every iterate, from the same start. J's first step from its
+    settled start then equals the reference step's, converged, and counts both loops' iterates."""
+    model, settings, reference = cobra_model(), StepSettings(), gait("J")
+    q, qd = initial_state(model, reference, settings)
+    fast = FastStepper(model, settings)
+    fast.qp = _StuckQP()
+    a = fast.step(q, qd, 0.0, reference)
+    b = step(model, q, qd, 0.0, reference, settings)
+    assert a.info.converged and b.info.converged
+    assert a.info.iterations == 50 + b.info.iterations
+    np.testing.assert_allclose(a.qd, b.qd, atol=1e-9)
+    np.testing.assert_allclose(a.p, b.p, atol=1e-9)

@@ -9,7 +9,8 @@ only the parts are faster:
 * the contact search and J_c in batches (:mod:`cobra_ref.fast.contacts`);
 * G from one Cholesky factor of M_FF (LAPACK, called directly);
 * the box QPs by certified active-set solves, OSQP warm and solving the first QP of every step
-  (:mod:`cobra_ref.fast.least_action`);
+  (:mod:`cobra_ref.fast.least_action`); a step whose fixed point they leave unconverged is solved
+  again by the reference step's loop (OSQP on every iterate);
 * the configuration update as one vector operation on the joints;
 * the servo's reference at the step's start read from the last step's end when the times agree.
 
@@ -106,9 +107,17 @@ class FastStepper:
         G = B.T @ B
         problem = least_action_problem(model, G, J @ qd_next, contacts, q, qd, servo_ref, s, self.joints)
         clock.append(time.perf_counter())
-        # Step 6: eq. (6)
+        # Step 6: eq. (6); where the certified solves leave the fixed point unconverged (their exact
+        # active sets can send Newton's guess elsewhere than OSQP's answers do), the reference step's
+        # loop, OSQP on every iterate, solves it again from the same start
         self.qp.new_step()
-        x, info = solve_least_action(problem, warm_start(contacts, self.memory, len(problem.c)), self.qp)
+        x_start = warm_start(contacts, self.memory, len(problem.c))
+        x, info = solve_least_action(problem, x_start, self.qp)
+        if not info.converged:
+            x, again = solve_least_action(problem, x_start)
+            info = again._replace(iterations=info.iterations + again.iterations,
+                                  qp_iterations=info.qp_iterations + again.qp_iterations,
+                                  qp_solves=info.qp_solves + again.qp_solves)
         clock.append(time.perf_counter())
         # Step 7: velocity, torques, energy ledger, position
         qd_next[F] += Minv_JT @ x
