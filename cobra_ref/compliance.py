@@ -28,6 +28,7 @@ damping the step adds, theta k dt = max(0, k dt - d), is none at dt <= d / k and
 much as is needed above. For every mass the step is stable at every dt: the spring-damper's
 map (g, w) -> (g+, w+) has its eigenvalues inside the unit circle when
 k dt^2 (1 - 2 theta) < 4 m_c + 2 d dt, which this theta meets (tests/test_compliance.py).
+
 The servo rows (``servo_rows``) are the same spring-damper on a joint's error, written so that
 the step tracks a reference to second order in dt. The position update q+ = q + dt qd+ makes qd+
 the velocity at the step's midpoint (the staggered, leapfrog reading of the step), so a force
@@ -39,8 +40,8 @@ sees). theta_d = 1/2 is the trapezoidal damper; on a light joint (I < kd dt / 2:
 the tail's at 1 ms) the damper leans towards qd+ just as far as keeps the step from flipping the
 error's sign, the servo's counterpart of the contact's rule. As dt -> 0 every joint has
 theta_d -> 1/2 and theta -> 0, and on one servoed joint tracking a sine the error falls by four
-per halving of dt (tests/test_servo.py). The step is stable for every I at every dt: the map of
-(e, dt qd) has its eigenvalues inside the unit circle when
+per halving of dt (tests/test_servo.py). One joint's step is stable for every I at every dt: the
+map of (e, dt qd) has its eigenvalues inside the unit circle when
 kp dt^2 (1 - 2 theta) < 4 I + 2 (2 theta_d - 1) kd dt, which these thetas meet.
 
 The rows (assumption ids refer to ``docs/assumptions.md``):

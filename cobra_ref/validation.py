@@ -9,27 +9,30 @@ README's option table is rendered from these rules (``options_markdown``).
 The time grid (``time_grid``) is checked as a whole before anything is allocated: a time step in
 the range ``[DT_MIN, DT_MAX]``, a duration of at least one step, at most ``MAX_STEPS``.
 
-Why dt <= 5 ms (``DT_MAX``): the contact's damper and friction and the servo are implicit in the
-step, and the contact's spring is implicit as far as dt > d / k needs (``compliance.contact_theta``),
-so no step size blows up; what a large step loses is accuracy. The compliant contact's damping time
+Why dt <= 5 ms (``DT_MAX``): the contact's damper and friction and the servo's damper are implicit
+in the step, and the contact's and the servo's springs as far as their stability needs
+(``compliance.contact_theta``, ``compliance.servo_theta``), so one contact or one joint is stable at
+every dt; what a large step loses is accuracy, and far above 5 ms the whole robot's run fails (C at
+50 ms, below). The compliant contact's damping time
 scale is m / d = 0.5 kg / 1e3 N s/m = 0.5 ms; a 5 ms step averages over it but still resolves the
 gaits (0.5 Hz: 400 steps per period). Measured (``simulate`` from ``initial_state``, default
 settings, the figures' box placement) against dt = 1 ms, C rolling for 3 s and sidewinding for 4 s:
 
     dt      C: penetration  C: box moved  C: head off   sidewinding: penetration  box moved  head off
-    1 ms    0.040 mm        0.168 m       -             0.57 mm                   0.150 m    -
-    2 ms    0.028 mm        0.170 m       0.6 cm        0.45 mm                   0.113 m    9.6 cm (of 1.8 m travelled)
-    3 ms    0.036 mm        0.173 m       1.2 cm        0.28 mm                   0.104 m    4.7 cm
-    5 ms    0.072 mm        0.177 m       2.6 cm        0.22 mm                   0.102 m    5.4 cm
-    10 ms   0.24 mm         0.186 m       6.1 cm        0.65 mm                   0.100 m    5.8 cm
-    20 ms   0.91 mm         0.194 m       14 cm         3.4 mm                    0.137 m    9.3 cm
-    50 ms   48 mm           0.76 m        30 cm         95 mm                     0.213 m    16 cm
+    1 ms    0.035 mm        0.167 m       -             0.70 mm                   0.162 m    -
+    2 ms    0.026 mm        0.170 m       0.7 cm        0.39 mm                   0.129 m    5.7 cm (of 1.8 m travelled)
+    3 ms    0.036 mm        0.172 m       1.4 cm        0.31 mm                   0.103 m    6.3 cm
+    5 ms    0.073 mm        0.176 m       2.8 cm        0.19 mm                   0.102 m    4.8 cm
+    10 ms   0.24 mm         0.180 m       7.2 cm        5.4 mm                    0.200 m    2.3 cm
+    20 ms   0.90 mm         0.182 m       17 cm         16 mm                     0.142 m    7.9 cm
+    50 ms   stops at 2.95 s                             34 mm                     0.456 m    30 cm
 
-(at 50 ms C rolling has 33 impacts against 3 at 1 ms, and the friction fixed point fails on 3 %
-of the steps). Up to 5 ms C agrees with 1 ms within a few centimetres and the penetration stays
-below 0.6 mm (sidewinding's box, which the robot strikes and tips, moves 0.10-0.15 m depending on
-dt: its push is not converged at these steps, docs/results.md); at 10 ms C's path parts by 6 cm,
-and from 20 ms on the robot sinks millimetres into the ground.
+(at 50 ms C's state leaves the physical range at 2.95 s, its mass matrix no longer positive
+definite, and sidewinding's friction fixed point fails on 1.25 % of the steps). Up to 5 ms C
+agrees with 1 ms within 3 cm and the penetration stays below 0.7 mm (sidewinding's box, which
+the robot strikes and tips, moves 0.10-0.16 m depending on dt: its push is not converged at
+these steps, docs/results.md); at 10 ms C's path parts by 7 cm and sidewinding sinks 5 mm into
+the ground, 16 mm at 20 ms.
 Why dt >= 10 us (``DT_MIN``): the solver's absolute tolerance of 1e-7 N s on an impulse is a force
 error of 1e-7 / dt, 0.01 N (0.2 % of a link's weight) at 10 us. Why at most 10^6 steps
 (``MAX_STEPS``): a run records about 2 kB per step (states, torques, solver records, the contact
@@ -51,8 +54,8 @@ MAX_STEPS = 1_000_000  # steps per run (see ``STEPS_WHY``)
 BYTES_PER_STEP = 2_000  # [B] about, a run's record per step (states, torques, solver records, contact log)
 
 DT_WHY = ("above 5 ms the runs leave the converged ones (the contact's damping time is m/d = 0.5 ms): measured, "
-          "C rolling ends 6 cm off at 10 ms and 14 cm at 20 ms, sidewinding sinks 3 mm into the ground at 20 ms, "
-          "95 mm at 50 ms; below "
+          "C rolling ends 7 cm off at 10 ms and 17 cm at 20 ms, sidewinding sinks 5 mm into the ground at 10 ms, "
+          "16 mm at 20 ms; below "
           "10 us the solver's tolerance 1e-7 N s is a force error above 0.01 N; see cobra_ref/validation.py")
 STEPS_WHY = (f"a run records about {BYTES_PER_STEP // 1000} kB per step: 10^6 steps are about "
              f"{MAX_STEPS * BYTES_PER_STEP / 1e9:.0f} GB and an hour of computing")
