@@ -12,8 +12,8 @@ the range ``[DT_MIN, DT_MAX]``, a duration of at least one step, at most ``MAX_S
 Why dt <= 5 ms (``DT_MAX``): the contact's damper and friction and the servo's damper are implicit
 in the step, and the contact's and the servo's springs as far as their stability needs
 (``compliance.contact_theta``, ``compliance.servo_theta``), so one contact or one joint is stable at
-every dt; what a large step loses is accuracy, and far above 5 ms the whole robot's run fails (C at
-50 ms, below). The compliant contact's damping time
+every dt; what a large step loses is accuracy, and far above 5 ms the whole robot's run diverges
+(C at 50 ms, below). The compliant contact's damping time
 scale is m / d = 0.5 kg / 1e3 N s/m = 0.5 ms; a 5 ms step averages over it but still resolves the
 gaits (0.5 Hz: 400 steps per period). Measured (``simulate`` from ``initial_state``, default
 settings, the figures' box placement) against dt = 1 ms, C rolling for 3 s and sidewinding for 4 s:
@@ -25,10 +25,10 @@ settings, the figures' box placement) against dt = 1 ms, C rolling for 3 s and s
     5 ms    0.073 mm        0.176 m       2.8 cm        0.19 mm                   0.102 m    4.8 cm
     10 ms   0.24 mm         0.180 m       7.2 cm        5.4 mm                    0.200 m    2.3 cm
     20 ms   0.90 mm         0.182 m       17 cm         16 mm                     0.142 m    7.9 cm
-    50 ms   stops at 2.95 s                             34 mm                     0.456 m    30 cm
+    50 ms   diverges                                    34 mm                     0.455 m    38 cm
 
-(at 50 ms C's state leaves the physical range at 2.95 s, its mass matrix no longer positive
-definite, and sidewinding's friction fixed point fails on 1.25 % of the steps). Up to 5 ms C
+(at 50 ms C's run diverges, the robot thrown metres deep into the ground and far away, and
+sidewinding's friction fixed point fails on 1.25 % of the steps). Up to 5 ms C
 agrees with 1 ms within 3 cm and the penetration stays below 0.7 mm (sidewinding's box, which
 the robot strikes and tips, moves 0.10-0.16 m depending on dt: its push is not converged at
 these steps, docs/results.md); at 10 ms C's path parts by 7 cm and sidewinding sinks 5 mm into
