@@ -20,9 +20,9 @@ from .kinematics import body_jacobian, forward_kinematics, integrate, point_jaco
 from .mjcf import to_mjcf
 from .model import Model, ModelError
 from .params import CobraParameters
+from .provenance import __version__
 from .robots import chain, cobra_model, neutral_q, random_state
 
-__version__ = "0.2.0.dev0"
 
 __all__ = [
     "CobraParameters", "Model", "ModelError", "bias_force", "body_jacobian", "body_kinetic_energies",

@@ -77,7 +77,7 @@ def to_mjcf(model: Model, timestep: float = TIMESTEP) -> str:
     (a ``ValidationError`` names the value otherwise); the default ``TIMESTEP`` is the one
     measured stable and converged for COBRA and the box (``docs/mujoco.md``).
     """
-    from .validation import RULES
+    from .infra.validation import RULES
 
     timestep = RULES["timestep"].check(timestep, "timestep")
     root = ET.Element("mujoco", model=model.name)

@@ -15,14 +15,14 @@ from dataclasses import asdict
 import numpy as np
 
 from .contact import KINDS, find_contacts
-from .executors import one_blas_thread
+from .infra.executors import one_blas_thread
 from .fast.stepper import FastStepper
 from .model import Model
 from .qp import ContactSolveError
 from .start import initial_state
 from .step import SimulationError, StepSettings, joint_coordinates, step
 from .trajectory import CONTACT_KEYS, STEP_KEYS, Trajectory
-from .validation import ValidationError, time_grid
+from .infra.validation import ValidationError, time_grid
 
 STEPPERS = ("fast", "reference")
 IMPACT_SPEED = 0.01  # [m/s] a contact that starts carrying load while approaching faster is an impact (A26)

@@ -49,7 +49,7 @@ def initial_state(model: Model, reference, settings: StepSettings = StepSettings
                      box_shift=box_shift, box_turn=box_turn)
     qd = np.zeros(model.nv)
     if settle:
-        from .executors import one_blas_thread
+        from .infra.executors import one_blas_thread
         from .fast.stepper import FastStepper
 
         hold = _Hold(reference(0.0)[0])

@@ -70,10 +70,10 @@ class StepSettings:
     margin: float = 0.01
 
     def __post_init__(self):
-        """Check every setting by its rule (:mod:`cobra_ref.validation`): dt within
+        """Check every setting by its rule (:mod:`cobra_ref.infra.validation`): dt within
         [DT_MIN, DT_MAX] (A14), a known contact law and servo, a margin in [0, 1] m; a
         ``ValidationError`` (a ValueError) names the field, the value and the allowed range."""
-        from .validation import RULES, check_choice
+        from .infra.validation import RULES, check_choice
 
         RULES["dt"].check(self.dt, "dt")
         check_choice("contact", self.contact, LAWS)

@@ -13,7 +13,7 @@ arrays of length N hold steps (from t_k to t_k+1):
   max |q - q_ref| at the step's end [rad]), the energy ledger (``kinetic``, ``potential``,
   ``elastic`` at the step's start, ``work_actuators``, ``work_contacts`` over the step [J]) and
   the impacts (``impact_count``, ``impact_impulse`` [N s], ``impact_energy`` [J], see
-  :func:`cobra_ref.analysis.impacts`);
+  :func:`cobra_ref.reproduce.analysis.impacts`);
 * the contact log (``CONTACT_KEYS``), one row per contact that carries a normal impulse in a
   step: ``contact_step``, ``contact_kind`` (0 robot-ground, 1 robot-box, 2 box-ground),
   ``contact_body`` (body A: the robot link, or the box for box-ground), ``contact_point``
@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .output import write_binary
+from .infra.output import write_binary
 
 STEP_KEYS = ("fp_converged", "fp_iter", "qp_iter", "qp_solves", "coulomb_residual", "complementarity",
              "cone_residual", "max_penetration", "n_contacts", "tau_excess", "q_excess", "qd_excess",
@@ -115,7 +115,7 @@ class Trajectory:
     def to_npz(self, path: str) -> None:
         """Write every array to an NPZ under exactly the name ``path`` (nothing appended: ``run``
         stays ``run``), atomically: a temporary file renamed onto the target, never half-written
-        (:mod:`cobra_ref.output`; ``OutputError`` for a directory, a device or a missing directory).
+        (:mod:`cobra_ref.infra.output`; ``OutputError`` for a directory, a device or a missing directory).
 
         Helper: ``cobra-ref simulate --out`` and the figure runs' cache.
         """

@@ -41,6 +41,6 @@ def floating_chain4():
 
 # one BLAS thread: the steps work on 23 x 23 matrices, where OpenBLAS's threads only cost time
 # (and tests run two at a time on a 2-core machine); results are bit-identical
-from cobra_ref.executors import limit_blas_threads  # noqa: E402
+from cobra_ref.infra.executors import limit_blas_threads  # noqa: E402
 
 limit_blas_threads(1)

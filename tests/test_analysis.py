@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from cobra_ref import analysis
+from cobra_ref.reproduce import analysis
 from cobra_ref.kinematics import forward_kinematics
 from cobra_ref.quaternion import quat_to_rot
 from cobra_ref.reproduce.runs import RunSpec, run

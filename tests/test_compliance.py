@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 from bodies import BALL_MASS, BALL_RADIUS, GRAVITY, at_height, ball, run
 from cobra_ref.compliance import contact_theta, normal_rows
 from cobra_ref.step import StepSettings
-from cobra_ref.validation import DT_MAX, DT_MIN
+from cobra_ref.infra.validation import DT_MAX, DT_MIN
 
 
 def step_map(model, mass: float, dt: float) -> np.ndarray:

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from cobra_ref.executors import SerialExecutor
+from cobra_ref.infra.executors import SerialExecutor
 from cobra_ref.gaits import gait
 from cobra_ref.robots import cobra_model
 from cobra_ref.start import placed_state
@@ -264,7 +264,7 @@ def test_own_pool_waits_for_its_work_or_ends_its_workers_after_an_exception():
     raises (as Ctrl-C does), the exception goes on and the worker processes are ended, not waited for."""
     import time
 
-    from cobra_ref.executors import own_pool
+    from cobra_ref.infra.executors import own_pool
 
     with own_pool(1) as pool:
         future = pool.submit(abs, -3)

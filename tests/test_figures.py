@@ -16,7 +16,7 @@ import pytest
 from matplotlib import image as mpimg
 from PIL import Image
 
-from cobra_ref import analysis
+from cobra_ref.reproduce import analysis
 from cobra_ref.reproduce.figures import FIGURES, PAPER_FIGURES, animate, common, make_all
 from cobra_ref.reproduce.runs import PAPER_GAITS, RunSpec, run_all
 

@@ -19,12 +19,12 @@ import pytest
 
 from cobra_ref.cli import main
 from cobra_ref.gaits import gait
-from cobra_ref.output import OutputError, atomic_write, check_output, write_binary, write_text
+from cobra_ref.infra.output import OutputError, atomic_write, check_output, write_binary, write_text
 from cobra_ref.params import CobraParameters
 from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import simulate
 from cobra_ref.step import SimulationError, StepSettings
-from cobra_ref.validation import (MAX_STEPS, ValidationError, options_markdown, readme_options_block,
+from cobra_ref.infra.validation import (MAX_STEPS, ValidationError, options_markdown, readme_options_block,
                                   time_grid)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -703,7 +703,7 @@ def test_the_readme_option_table_is_the_generated_one():
     with open(os.path.join(ROOT, "README.md"), encoding="utf-8") as f:
         readme = f.read()
     assert readme_options_block(readme) == options_markdown(), \
-        "README.md's option table is stale: run `python -m cobra_ref.validation README.md`"
+        "README.md's option table is stale: run `python -m cobra_ref.infra.validation README.md`"
 
 
 def test_the_option_table_names_every_option_with_unit_and_range():

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import cobra_ref as cr
-from cobra_ref.executors import SerialExecutor
+from cobra_ref.infra.executors import SerialExecutor
 from cobra_ref.gaits import gait
 from cobra_ref.reproduce import mujoco_check as mc
 from cobra_ref.robots import cobra_model

@@ -19,7 +19,7 @@ from cobra_ref.compliance import servo_rows, servo_theta
 from cobra_ref.robots import chain
 from cobra_ref.simulate import simulate
 from cobra_ref.step import StepSettings
-from cobra_ref.validation import DT_MAX, DT_MIN
+from cobra_ref.infra.validation import DT_MAX, DT_MIN
 
 KP, KD = 500.0, 5.0  # the servo's gains (A7)
 

@@ -516,7 +516,7 @@ def test_optimization_figure_draws_the_recorded_box_path_and_replays_only_a_json
     del old["box_path"]
     (directory / "C.json").write_text(json.dumps(old))
     monkeypatch.undo()
-    from cobra_ref.executors import SerialExecutor
+    from cobra_ref.infra.executors import SerialExecutor
 
     futures = regenerate._replays_submit(SerialExecutor(), str(directory), ["C"], str(cache))
     assert len(futures) == 1

@@ -4,7 +4,7 @@ hand on a small made-up trajectory (no simulation)."""
 import numpy as np
 import pytest
 
-from cobra_ref import analysis
+from cobra_ref.reproduce import analysis
 from cobra_ref.gaits import N_JOINTS
 from cobra_ref.trajectory import CONTACT_KEYS, STEP_KEYS, Trajectory
 

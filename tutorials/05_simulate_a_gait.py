@@ -4,7 +4,7 @@
 # the box at about 0.87 s), then read the trajectory the way the paper's figures do: which link
 # touches the ground when (fig. 4), the forces on the box (fig. 5), the locomotion power
 # (fig. 7) and the work on the box (fig. 6), each recomputed by hand from the stored arrays
-# and compared with `cobra_ref.analysis`; and two health checks of the run: how well the
+# and compared with `cobra_ref.reproduce.analysis`; and two health checks of the run: how well the
 # joint servos track the gait, and the impacts (the paper asks for non-impulsive contact).
 # **Paper:** [COBRA] sec. "Simulation Setup" (position-controlled joints, spring-damper
 # contact) and sec. "Results"; the work and power definitions are in `cobra_ref/analysis.py`
@@ -18,7 +18,7 @@ import pathlib
 import matplotlib.pyplot as plt
 import numpy as np
 
-from cobra_ref import analysis
+from cobra_ref.reproduce import analysis
 from cobra_ref.contact import KINDS
 from cobra_ref.gaits import gait
 from cobra_ref.robots import cobra_model

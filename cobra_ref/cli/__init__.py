@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..executors import limit_blas_threads
+from ..infra.executors import limit_blas_threads
 from . import bench, convergence, figures, info, optimize, simulate, sweep, view
 
 SUBCOMMANDS = (info, simulate, optimize, figures, view, bench, convergence, sweep)

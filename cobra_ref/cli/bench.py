@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import json
 
-from ..progress import progress_printer
-from ..validation import RULES, ValidationError, time_grid
+from ..infra.progress import progress_printer
+from ..infra.validation import RULES, ValidationError, time_grid
 from .common import c_stdout_silenced, check_out, fail, write_text_atomic
 
 

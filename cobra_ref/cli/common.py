@@ -1,9 +1,9 @@
 """What every ``cobra-ref`` subcommand shares: argument types, output checks, quiet C libraries.
 
 Helper: conventions of the command line. Every input is checked before the long run, by the
-rules of :mod:`cobra_ref.validation` (an option's ``type=``, or ``fail`` with the rule's
+rules of :mod:`cobra_ref.infra.validation` (an option's ``type=``, or ``fail`` with the rule's
 message: exit status 2 for a malformed option, 1 for input refused after parsing, never a
-traceback); every output by :func:`cobra_ref.output.check_output` (exact name, regular files
+traceback); every output by :func:`cobra_ref.infra.output.check_output` (exact name, regular files
 only, a real write probe). Progress and summaries go to stderr, stdout carries one JSON line;
 files are written atomically. A run that fails part-way keeps what was computed in
 ``OUT.failed.npz`` (``OUT`` without its extension), named in the error message.
@@ -19,8 +19,8 @@ import sys
 
 import numpy as np
 
-from ..output import OutputError, check_output
-from ..progress import progress_printer
+from ..infra.output import OutputError, check_output
+from ..infra.progress import progress_printer
 
 
 def fail(message) -> SystemExit:
@@ -56,7 +56,7 @@ def write_text_atomic(path: str, text: str, what: str = "output") -> None:
 
     Helper: shared by every cobra-ref subcommand.
     """
-    from ..output import write_text
+    from ..infra.output import write_text
 
     check_out(path, what)
     try:
@@ -163,7 +163,7 @@ def gait_param(text: str) -> tuple:
 
     Helper: ``--param`` of cobra-ref simulate.
     """
-    from ..validation import RULES, ValidationError
+    from ..infra.validation import RULES, ValidationError
 
     name, sep, value = str(text).partition("=")
     name = name.strip()
@@ -188,7 +188,7 @@ def add_model_options(p) -> None:
 
     Helper: the command line (cobra-ref simulate, optimize).
     """
-    from ..validation import RULES
+    from ..infra.validation import RULES
 
     p.add_argument("--mu", type=RULES["mu"].arg("--mu"), default=None,
                    help="friction coefficient robot-ground, and box-ground unless --mu-box-ground (default 1.0; A13)")

@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import sys
 
-from ..validation import RULES, ValidationError, check_choice
+from ..infra.validation import RULES, ValidationError, check_choice
 from .common import c_stdout_silenced, check_out, fail, write_text_atomic
 
 

@@ -10,7 +10,7 @@ import os
 import sys
 
 from .common import c_stdout_silenced
-from ..validation import RULES
+from ..infra.validation import RULES
 
 
 def cmd_figures(args) -> int:

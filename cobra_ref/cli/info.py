@@ -13,7 +13,7 @@ import numpy as np
 from ..mjcf import TIMESTEP
 from ..params import CobraParameters, parameter_table
 from ..robots import cobra_model
-from ..validation import RULES
+from ..infra.validation import RULES
 from .common import check_out, write_text_atomic
 
 _AXIS_NAME = {"Rx": "roll (x)", "Ry": "pitch (y)", "Rz": "yaw (z)", "free": "free (6 DoF)"}
@@ -53,7 +53,7 @@ def cmd_info(args) -> int:
 
 def cmd_export_mjcf(args) -> int:
     """Write the COBRA + box scene as MJCF (atomically: nothing half-written on failure; through a
-    symbolic link to its target; a directory or a device is refused, see :mod:`cobra_ref.output`).
+    symbolic link to its target; a directory or a device is refused, see :mod:`cobra_ref.infra.output`).
 
     Helper: the command line (cobra-ref info, export-mjcf).
     """

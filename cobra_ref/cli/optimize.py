@@ -10,11 +10,11 @@ import sys
 
 import numpy as np
 
-from ..executors import SerialExecutor
+from ..infra.executors import SerialExecutor
 from ..planning.problem import DECISION, DEFAULTS, RAMP_TIME, ShootingError, Weights, make_problem
 from ..planning.results import summary_lines, write_result
 from ..planning.search import optimize
-from ..validation import RULES
+from ..infra.validation import RULES
 from .common import add_model_options, c_stdout_silenced, check_writable, model_parameters
 
 

@@ -2,7 +2,7 @@
 
 Helper: the command-line side of :func:`cobra_ref.simulate.simulate`; ``--params`` replays an
 optimum of ``cobra-ref optimize`` (:mod:`cobra_ref.planning.results`). Every input is checked
-before the run (:mod:`cobra_ref.validation`): the options, the reference (angles within q_max,
+before the run (:mod:`cobra_ref.infra.validation`): the options, the reference (angles within q_max,
 rates against qd_max), the time grid, the output; each option is recorded in the NPZ's ``meta``
 (``options``) so that a run can be repeated.
 """
@@ -18,7 +18,7 @@ from ..planning.cost import shooting_cost
 from ..planning.problem import ShootingError
 from ..planning.results import ParamsRun, params_reference
 from ..robots import cobra_model
-from ..validation import RULES, ValidationError, time_grid
+from ..infra.validation import RULES, ValidationError, time_grid
 from .common import add_model_options, c_stdout_silenced, check_out, fail, gait_param, model_parameters, run_and_write
 
 DEFAULT_DURATION = 10.0  # [s] (assumption A11)

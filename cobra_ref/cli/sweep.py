@@ -9,7 +9,7 @@ import json
 import sys
 import time
 
-from ..validation import RULES, ValidationError, check_choice
+from ..infra.validation import RULES, ValidationError, check_choice
 from .common import c_stdout_silenced, check_out, fail, write_text_atomic
 
 
@@ -18,7 +18,7 @@ def cmd_sweep(args) -> int:
 
     Helper: the command line (cobra-ref sweep).
     """
-    from ..executors import default_executor
+    from ..infra.executors import default_executor
     from ..reproduce.sweep import format_summary, run_scenario, scenarios, summarize
     from ..step import LAWS
 

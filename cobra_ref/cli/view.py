@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import sys
 
-from ..validation import RULES
+from ..infra.validation import RULES
 from .common import check_out
 
 
@@ -63,7 +63,7 @@ def cmd_render(args) -> int:
 
     Helper: the command line (cobra-ref render).
     """
-    from ..progress import progress_printer
+    from ..infra.progress import progress_printer
     from ..viz.render import RenderError, output_format, render_file
 
     try:

@@ -5,7 +5,7 @@ rollout), ``cost`` (the cost of a rollout), ``search`` (compass search or differ
 run on any executor), ``results`` (the params JSON and its replay).
 """
 
-from ..executors import SerialExecutor
+from ..infra.executors import SerialExecutor
 from .cost import evaluate, shooting_cost
 from .problem import (DECISION, DEFAULTS, ShootingError, ShootingProblem, make_problem, middle_pose, rollout,
                       start_state)

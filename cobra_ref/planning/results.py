@@ -14,7 +14,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..output import atomic_write
+from ..infra.output import atomic_write
+from ..provenance import code_version
 from ..gaits import gait
 from ..robots import cobra_model
 from ..trajectory import Trajectory
@@ -47,14 +48,14 @@ def problem_from_dict(d: dict) -> ShootingProblem:
     """The problem back from ``problem_to_dict``'s output; ShootingError if malformed.
 
     Helper: replay of a params JSON. Every setting is checked by its rule
-    (:mod:`cobra_ref.validation`) and the message names it ("malformed settings in params JSON:
+    (:mod:`cobra_ref.infra.validation`) and the message names it ("malformed settings in params JSON:
     settings.<field>: ..."): a missing key, a string where a number belongs, a non-finite number,
     dt and duration (a time grid of at most ``MAX_STEPS``), the goal (``check_goal``: not at the
     box's start, reachable), the decision (names, bounds lower < upper, x0 within them), the
     weights (finite, >= 0), the CobraParameters (each field's rule), servo and contact law.
     """
     from ..params import CobraParameters
-    from ..validation import RULES, ValidationError, is_number, time_grid
+    from ..infra.validation import RULES, ValidationError, is_number, time_grid
     from .problem import check_goal
 
     where = "settings"
@@ -125,7 +126,7 @@ def problem_from_dict(d: dict) -> ShootingProblem:
 def _floats(values, n: int | None = None, field: str = "values") -> tuple:
     """The finite numbers in ``values`` as floats (``n`` of them, if given); a ValueError naming
     ``field`` for a string, a non-finite number or a wrong count."""
-    from ..validation import is_number
+    from ..infra.validation import is_number
 
     if isinstance(values, (str, bytes, dict)) or not hasattr(values, "__iter__"):
         raise ValueError(f"{field}: expected {n or 'some'} numbers, got {values!r}")
@@ -133,17 +134,6 @@ def _floats(values, n: int | None = None, field: str = "values") -> tuple:
     if (n is not None and len(values) != n) or not all(is_number(v) and np.isfinite(v) for v in values):
         raise ValueError(f"{field}: expected {n or 'some'} finite numbers, got {values!r}")
     return tuple(float(v) for v in values)
-
-
-def code_version() -> dict:
-    """The package version and a SHA-256 of the physics modules' source (as ``reproduce`` keys its cache).
-
-    Helper: recorded in the params JSON; `cobra-ref simulate --params` notes a replay on other code.
-    """
-    from .. import __version__
-    from ..reproduce.runs import physics_hash
-
-    return {"version": __version__, "physics_sha256": physics_hash(("planning",))}
 
 
 def transfer(problem: ShootingProblem, x, plan_entry: dict | None = None, check_dt: float = CHECK_DT) -> dict:
@@ -193,7 +183,7 @@ def result_to_dict(result: ShootingResult) -> dict:
             "settings": problem_to_dict(result.problem),
             "optimizer": {"method": result.method, "seed": result.seed, "maxiter": result.maxiter,
                           "iterations": result.iterations, "rollouts": len(result.history), **result.options},
-            "code": code_version(), "wall_time": result.wall_time,
+            "code": code_version(planning=True), "wall_time": result.wall_time,
             "impacts": impact_comparison(result),
             **({"transfer": result.transfer} if result.transfer is not None else {}),
             "history": [{k: v for k, v in e.items() if k != "box_path"} for e in result.history]}
@@ -244,7 +234,7 @@ def load_result(path: str) -> dict:
 
     Helper: ``cobra-ref simulate --params`` and the figures.
     """
-    from ..validation import is_number
+    from ..infra.validation import is_number
 
     if not os.path.isfile(path):
         raise ShootingError(f"params file not found: {path}")
@@ -371,7 +361,7 @@ def params_reference(path: str, duration: float | None = None) -> ParamsRun:
     the optimization's steps). Raises ``ShootingError`` for a missing or malformed file or a bad
     ``duration``.
     """
-    from ..validation import ValidationError, time_grid
+    from ..infra.validation import ValidationError, time_grid
 
     record = load_result(path)
     problem: ShootingProblem = record["problem"]
@@ -385,4 +375,4 @@ def params_reference(path: str, duration: float | None = None) -> ParamsRun:
     q0, qd0 = start_state(problem, x, model)
     return ParamsRun(problem.gait, problem.reference(x), problem.settings(),
                      problem.duration if duration is None else float(duration), q0, qd0, model, problem,
-                     float(record["cost"]), record.get("code", {}).get("physics_sha256") == code_version()["physics_sha256"])
+                     float(record["cost"]), record.get("code", {}).get("physics_sha256") == code_version(planning=True)["physics_sha256"])

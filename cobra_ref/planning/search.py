@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..executors import default_executor, shutdown
+from ..infra.executors import default_executor, shutdown
 from ..gaits import gait_params
 from .cost import evaluate
 from .problem import DEFAULT_MAXITER, DEFAULTS, ShootingError, ShootingProblem, make_problem

@@ -82,7 +82,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from .. import analysis
+from . import analysis
 
 ROLLING = ("C", "S", "J", "J-mirror")
 SIDEWINDING = "sidewinding"

@@ -30,7 +30,7 @@ import time
 
 import numpy as np
 
-from ..analysis import impacts, locomotion_power
+from .analysis import impacts, locomotion_power
 from ..contact import ROBOT_BOX
 from ..gaits import gait
 from ..placement import travel_placement
@@ -38,7 +38,7 @@ from ..robots import cobra_model
 from ..simulate import simulate
 from ..start import initial_state
 from ..step import StepSettings
-from ..validation import ValidationError
+from ..infra.validation import ValidationError
 
 DTS = (2e-3, 1e-3, 5e-4, 2.5e-4)
 WINDOW = 2e-3  # [s] the moving mean of forces, torques and power

@@ -245,7 +245,7 @@ def robot_travel_rows(gaits, duration: float = TRAVEL_DURATION, executor=None, t
     and ``mujoco`` (dx, dy) [m], the ``compare_travel`` keys, ``band``, and MuJoCo's
     max_penetration, max_tracking_error, max_joint_torque, n_warnings and wall times.
     """
-    from ..executors import SerialExecutor
+    from ..infra.executors import SerialExecutor
     from ..gaits import gait
     from ..robots import cobra_model
 

@@ -48,8 +48,9 @@ from contextlib import nullcontext
 
 import numpy as np
 
-from ..executors import SerialExecutor, own_pool
-from ..output import atomic_write, write_text
+from ..infra.executors import SerialExecutor, own_pool
+from ..infra.output import atomic_write, write_text
+from ..provenance import PLANNING_MODULES, physics_hash
 from .runs import PAPER_GAITS, RunSpec, run_all
 
 FULL_DURATION, QUICK_DURATION = 10.0, 1.0
@@ -66,7 +67,7 @@ def check_output_dir(out_dir: str) -> None:
 
     Helper: checked before any simulation starts, so a bad directory costs nothing.
     """
-    from ..output import check_output
+    from ..infra.output import check_output
 
     try:
         os.makedirs(out_dir, exist_ok=True)
@@ -390,7 +391,6 @@ def _mujoco_key(boxed: dict, runs: dict, duration: float) -> str:
 
     from . import mujoco_check
     from .. import mjcf
-    from .runs import physics_hash
 
     h = hashlib.sha256(json.dumps({"runs": {g: [s.key() for s in members] for g, members in boxed.items()},
                                    "duration": duration, "mujoco": mujoco.__version__,
@@ -503,10 +503,9 @@ def _replayed_box_path(path: str, cache_dir: str) -> np.ndarray:
 
 def _replay_cache(path: str, cache_dir: str) -> str:
     """Where ``_replayed_box_path`` caches the optimum ``path``: a hash of the JSON and the physics source."""
-    from .runs import physics_hash
 
     with open(path, "rb") as f:
-        key = hashlib.sha256(f.read() + physics_hash(("planning",)).encode()).hexdigest()[:16]
+        key = hashlib.sha256(f.read() + physics_hash(PLANNING_MODULES).encode()).hexdigest()[:16]
     return os.path.join(cache_dir, f"optimum-{key}.npy")
 
 

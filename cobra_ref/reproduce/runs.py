@@ -41,12 +41,12 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, field, replace
 
 
-from .. import __version__
+from ..provenance import __version__, physics_hash
 from ..gaits import gait, gait_params
-from ..executors import worker_init
+from ..infra.executors import worker_init
 from ..params import CobraParameters
 from ..placement import TravelPlacement, travel_placement
-from ..progress import progress_printer
+from ..infra.progress import progress_printer
 from ..robots import cobra_model
 from ..simulate import simulate
 from ..start import initial_state
@@ -110,23 +110,6 @@ class RunSpec:
     def filename(self) -> str:
         stem = self.gait if self.member is None else f"{self.gait}-m{self.member.index}"
         return f"{stem}-{self.key()[:16]}.npz"
-
-
-def physics_hash(extra=()) -> str:
-    """SHA-256 of the source of every module a simulation can run: the physics core (the modules
-    at the top of the package) and the fast wing, plus the subpackages named in ``extra``.
-
-    Helper: the code-version part of the cache keys and of the optimizer's params JSON. The files
-    are found, not listed, so a new physics module cannot be forgotten.
-    """
-    root, h = os.path.dirname(os.path.dirname(os.path.abspath(__file__))), hashlib.sha256()
-    for folder in ("", "fast") + tuple(extra):
-        directory = os.path.join(root, folder)
-        for name in sorted(os.listdir(directory)):
-            if name.endswith(".py"):
-                with open(os.path.join(directory, name), "rb") as f:
-                    h.update(f"{folder}/{name}".encode() + f.read())
-    return h.hexdigest()
 
 
 def run(spec: RunSpec, cache_dir: str, force: bool = False, progress=None) -> tuple[Trajectory, bool]:

@@ -28,7 +28,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .. import analysis
+from . import analysis
 from ..gaits import gait
 from ..params import CobraParameters
 from ..planning.problem import DECISION

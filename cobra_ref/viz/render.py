@@ -33,7 +33,7 @@ import time
 
 import numpy as np
 
-from ..output import atomic_write
+from ..infra.output import atomic_write
 from . import scene
 
 FORMATS = ("png", "gif", "mp4")

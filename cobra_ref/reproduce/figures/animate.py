@@ -35,7 +35,7 @@ import time
 import numpy as np
 from matplotlib.animation import FuncAnimation, PillowWriter
 
-from ...output import write_text
+from ...infra.output import write_text
 from . import common
 from .fig03_snapshots import draw_scene, is_mirrored, scene_limits
 

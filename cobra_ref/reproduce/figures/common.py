@@ -32,7 +32,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
-from ...output import atomic_write  # noqa: E402
+from ...infra.output import atomic_write  # noqa: E402
 
 ONE_COLUMN, TWO_COLUMN = 3.5, 7.0  # figure widths [in]
 DPI = 150

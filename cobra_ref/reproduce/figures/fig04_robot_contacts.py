@@ -24,7 +24,7 @@ import numpy as np
 from matplotlib.colors import to_rgba
 from matplotlib.lines import Line2D
 
-from ...analysis import ROBOT_GROUND, contact_forces
+from ..analysis import ROBOT_GROUND, contact_forces
 from . import common
 
 # Kelly's colours of maximum contrast (K. L. Kelly, "Twenty-two colors of maximum contrast",

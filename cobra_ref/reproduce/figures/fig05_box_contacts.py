@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.lines import Line2D
 
-from ...analysis import BOX_GROUND, ROBOT_BOX, contact_forces
+from ..analysis import BOX_GROUND, ROBOT_BOX, contact_forces
 from . import common
 
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.lines import Line2D
 
-from ...analysis import box_work, efficiency_fit, locomotion_work
+from ..analysis import box_work, efficiency_fit, locomotion_work
 from . import common
 
 ENDPOINTS_GID = "ensemble-endpoints"  # the members' (W_box(T), W_loc(T)) dots: "<gid>:<gait>"

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...analysis import locomotion_power, percentile_99
+from ..analysis import locomotion_power, percentile_99
 from . import common
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...analysis import percentile_99
+from ..analysis import percentile_99
 from . import common
 
 JOINTS = ("J5", "J6")

@@ -19,7 +19,7 @@ import numpy as np
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
 
-from ...analysis import box_distance
+from ..analysis import box_distance
 from . import common
 
 BAR_WIDTH = 0.8  # without an ensemble; with one, the bar is narrower and the spread beside it

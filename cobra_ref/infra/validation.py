@@ -507,7 +507,7 @@ def options_markdown(parser=None) -> str:
     Helper: the README block between the options markers (``tests/test_inputs.py`` checks it).
     """
     if parser is None:
-        from .cli import build_parser
+        from ..cli import build_parser
 
         parser = build_parser()
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
@@ -533,7 +533,7 @@ OPTIONS_END = "<!-- /options -->"
 def readme_with_options(text: str, table: str | None = None) -> str:
     """``text`` (the README) with the block between the options markers replaced by the table.
 
-    Helper: ``python -m cobra_ref.validation README.md`` rewrites the README's option table.
+    Helper: ``python -m cobra_ref.infra.validation README.md`` rewrites the README's option table.
     """
     table = options_markdown() if table is None else table
     start, end = text.index(OPTIONS_BEGIN) + len(OPTIONS_BEGIN), text.index(OPTIONS_END)
@@ -549,7 +549,7 @@ def readme_options_block(text: str) -> str:
     return text[start:end].strip() + "\n"
 
 
-if __name__ == "__main__":  # python -m cobra_ref.validation README.md
+if __name__ == "__main__":  # python -m cobra_ref.infra.validation README.md
     import sys
 
     from .output import write_text

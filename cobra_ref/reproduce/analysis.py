@@ -29,10 +29,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND
-from .gaits import N_JOINTS
-from .params import CobraParameters
-from .quaternion import quat_to_rot
+from ..contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND
+from ..gaits import N_JOINTS
+from ..params import CobraParameters
+from ..quaternion import quat_to_rot
 
 JOINT_VELOCITIES = slice(6, 6 + N_JOINTS)  # the joint rates in qd (after the head's 6 base velocities)
 ROBUST_PERCENTILE = 99.0  # the percentile reported beside each maximum [%]
