@@ -48,6 +48,7 @@ import re
 from dataclasses import dataclass
 
 # ----------------------------------------------------------------------------------------- time grid
+DEFAULT_DT = 1e-3  # [s] the time step of every run unless one is given (docs/assumptions.md A14)
 DT_MIN = 1e-5  # [s] the QP's absolute tolerance 1e-7 N s is a force error of 1e-7 / dt: 0.01 N at 10 us
 DT_MAX = 5e-3  # [s] (docs/assumptions.md A14; measured, see ``DT_WHY``)
 MAX_STEPS = 1_000_000  # steps per run (see ``STEPS_WHY``)
