@@ -21,8 +21,8 @@ from .spatial import crf, crm
 def rnea(model: Model, q, qd, qdd, f_ext=None) -> np.ndarray:
     """Inverse dynamics tau = M(q) qdd + h(q, qd) - (generalized external forces).
 
-    Implements: [RBDA] Table 5.1 (recursive Newton-Euler), gravity as a fictitious base
-    acceleration a_0 = -g::
+    Implements: [COBRA] eq. (1) solved for tau, by [RBDA] Table 5.1 (recursive Newton-Euler),
+    gravity as a fictitious base acceleration a_0 = -g::
 
         v[i] = X_up[i] v[p] + S_i qd_i
         a[i] = X_up[i] a[p] + S_i qdd_i + c_J[i] + v[i] x v_J
@@ -63,7 +63,7 @@ def bias_force(model: Model, q, qd) -> np.ndarray:
 def crba(model: Model, q) -> np.ndarray:
     """Joint-space inertia matrix M(q), (nv, nv), symmetric positive definite.
 
-    Implements: [RBDA] Table 6.2 (composite-rigid-body algorithm)::
+    Implements: [COBRA] eq. (1)'s M(q), by [RBDA] Table 6.2 (composite-rigid-body algorithm)::
 
         I_c[i] = I[i] + sum over children c of X_up[c]^T I_c[c] X_up[c]
         F = I_c[i] S_i;  M[i, i] = S_i^T F

@@ -7,7 +7,7 @@
 # and compared with `cobra_ref.reproduce.analysis`; and two health checks of the run: how well the
 # joint servos track the gait, and the impacts (the paper asks for non-impulsive contact).
 # **Paper:** [COBRA] sec. "Simulation Setup" (position-controlled joints, spring-damper
-# contact) and sec. "Results"; the work and power definitions are in `cobra_ref/analysis.py`
+# contact) and sec. "Results"; the work and power definitions are in `cobra_ref/reproduce/analysis.py`
 # (the paper plots them without defining them).
 # **Run:** `python tutorials/05_simulate_a_gait.py` (about 10 s; writes `05_contacts.png`).
 

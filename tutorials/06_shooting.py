@@ -35,7 +35,7 @@ np.set_printoptions(precision=4, suppress=True)
 # (so p > 0 only where the gap closes: p is "orthogonal to the gap function"). The piston's force is
 # F = m_p (v_p+ - v_p) / dt + p / dt, the analogue of COBRA's joint torques recovered from eq. (1).
 #
-# The shooting cost has the same terms as COBRA's (`cobra_ref/shooting.py`):
+# The shooting cost has the same terms as COBRA's (`cobra_ref/planning/cost.py`):
 #
 #     J(A, f) = integral F^2 dt / (F_max^2 T) + 10 (d_T / d_0)^2 + integral max(0, |F| - F_max) dt / (F_max T)
 
@@ -89,7 +89,7 @@ print(f"grid minimum J = {J_grid[k_min]:.4f} at A = {AA[k_min]:.3f} m, f = {FF[k
 print(f"plateau A < gap0: J in [{J_grid[A_grid < gap0].min():.4f}, {J_grid[A_grid < gap0].max():.4f}]")
 
 # %% [markdown]
-# ## 3. The compass search of `cobra_ref.shooting`, on the toy
+# ## 3. The compass search of `cobra_ref.planning`, on the toy
 # `sh.compass_search` is the optimizer of `cobra-ref optimize`: each iteration polls the 2n points
 # x +- step e_i (in the bounds scaled to [0, 1]), as one batch, so that the 2n rollouts run in
 # parallel; it moves to the best one if it lowers J and halves the step otherwise. Here a batch is
