@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .infra.validation import MODEL_NUMBERS, PARAMETER_RULES, ValidationError
 from .spatial import mcI, plux
 
 JOINT_NQ = {"free": 7, "Rx": 1, "Ry": 1, "Rz": 1}
@@ -178,14 +179,7 @@ def _validate(model: Model) -> None:
     for name in per_body:
         if len(getattr(model, name)) != nb:
             raise ModelError(f"{name} has {len(getattr(model, name))} entries, expected {nb} (one per body)")
-    for name in ("mu", "mu_robot_box", "mu_box_ground"):
-        value = getattr(model, name)
-        if value is not None and not (np.isfinite(value) and value >= 0):
-            raise ModelError(f"{name} must be finite and >= 0, got {value}")
-    for name in ("contact_stiffness", "contact_damping", "stiction_velocity", "servo_kp", "servo_kd"):
-        value = getattr(model, name)
-        if not (np.isfinite(value) and value > 0):
-            raise ModelError(f"{name} must be finite and > 0, got {value}")
+    _check_numbers(model)
     for i in range(nb):
         who = f"body {i} ({model.body_names[i]!r})"
         if not -1 <= model.parent[i] < i:
@@ -198,6 +192,20 @@ def _validate(model: Model) -> None:
         R = np.asarray(model.tree_rot[i], dtype=float)
         if R.shape != (3, 3) or not np.allclose(R.T @ R, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
             raise ModelError(f"{who}: tree_rot is not a rotation matrix")
+
+
+def _check_numbers(model: Model) -> None:
+    """The friction, contact-law and servo numbers by the rules ``CobraParameters`` checks them by
+    (``validation.PARAMETER_RULES``, one rule set for both); None is "the same as mu" for the
+    robot-box and box-ground friction."""
+    for name in MODEL_NUMBERS:
+        value = getattr(model, name)
+        if value is None and name in ("mu_robot_box", "mu_box_ground"):
+            continue
+        try:
+            PARAMETER_RULES[name].check(value, name)
+        except ValidationError as exc:
+            raise ModelError(str(exc)) from None
 
 
 def _check_inertia(who: str, I_com: np.ndarray) -> None:

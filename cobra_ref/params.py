@@ -65,9 +65,10 @@ class CobraParameters:
     stiction_velocity: float = 1e-3
 
     def __post_init__(self):
-        """Check every field by its rule (:mod:`cobra_ref.infra.validation`: finite, in range, in its
-        unit; inertias positive and within the triangle inequality); a ``ValidationError`` (a
-        ValueError) names the field, the value and the allowed range."""
+        """Check every field by its rule (``PARAMETER_RULES`` of :mod:`cobra_ref.infra.validation`,
+        the rules ``Model`` checks its numbers by too: finite, in range, in its unit; inertias
+        positive and within the triangle inequality); a ``ValidationError`` (a ValueError) names the
+        field, the value and the allowed range."""
         from .infra.validation import check_parameters
 
         check_parameters(self)

@@ -27,6 +27,7 @@ import numpy as np
 from .model import BoxGeom, Model, SphereSet
 from .params import CobraParameters
 
+
 def _cylinder_spheres(length: float, radius: float, x_center: float) -> list[tuple[np.ndarray, float]]:
     """Evenly spaced spheres of the cylinder's radius along its axis (see module docstring)."""
     n = max(1, round(length / (2 * radius)))
@@ -34,25 +35,13 @@ def _cylinder_spheres(length: float, radius: float, x_center: float) -> list[tup
     return [(np.array([x, 0.0, 0.0]), radius) for x in xs]
 
 
-def cobra_model(params: CobraParameters | None = None, with_box: bool = True) -> Model:
-    """The COBRA snake (12 bodies, 11 joints) with the box as a free body, on flat ground z = 0.
-
-    Robot: nq = 18, nv = 17 (the paper's M is 17 x 17). With the box: nq = 25, nv = 23,
-    q = [head x y z qw qx qy qz, theta_0..theta_10, box x y z qw qx qy qz].
-
-    Helper: model factories.
-    """
-    p = params or CobraParameters()
-    n = p.n_body_links
-    lengths = [p.length_head] + [p.length_link] * n + [p.length_tail]
-    radii = [p.radius_head] + [p.radius_link] * n + [p.radius_tail]
-    masses = [p.mass_head] + [p.mass_link] * n + [p.mass_tail]
-    inertias = [p.inertia_head] + [p.inertia_link] * n + [p.inertia_tail]
-    half_gap = p.joint_gap / 2
-
+def _chain_frames(lengths: list, half_gap: float) -> tuple[list, list, list, list, list, list]:
+    """(names, joints, parent, jtype, tree_pos, com) of the robot's bodies: the head on a free
+    joint, then one body per joint, even joints yaw (z), odd joints pitch (y) (module docstring)."""
+    nb = len(lengths)
     names, joints, parent, jtype, tree_pos, com = [], [], [], [], [], []
-    for i in range(n + 2):
-        names.append("head" if i == 0 else "tail" if i == n + 1 else f"L{i}")
+    for i in range(nb):
+        names.append("head" if i == 0 else "tail" if i == nb - 1 else f"L{i}")
         if i == 0:
             joints.append("base")
             parent.append(-1)
@@ -64,35 +53,48 @@ def cobra_model(params: CobraParameters | None = None, with_box: bool = True) ->
             parent.append(i - 1)
             # even joints yaw (z), odd joints pitch (y)
             jtype.append("Rz" if (i - 1) % 2 == 0 else "Ry")
-            # the previous joint sits half a gap behind the parent's cylinder
             # joint i-1 sits half a gap behind the back face of the parent's cylinder:
             # the head's frame is at its centre, every other frame at its own front joint
             back_face = -lengths[0] / 2 if i == 1 else -(half_gap + lengths[i - 1])
             tree_pos.append(np.array([back_face - half_gap, 0.0, 0.0]))
             com.append(np.array([-(half_gap + lengths[i] / 2), 0.0, 0.0]))
+    return names, joints, parent, jtype, tree_pos, com
+
+
+def _add_box(p: CobraParameters, bodies: dict, nb_robot: int) -> tuple:
+    """Append the box, a free body with its frame at its centre, to every per-body list of
+    ``bodies``; return its ``BoxGeom`` as a 1-tuple."""
+    for key, value in (("names", "box"), ("joints", "box_free"), ("parent", -1), ("jtype", "free"),
+                       ("tree_pos", np.zeros(3)), ("com", np.zeros(3)), ("masses", p.box_mass),
+                       ("I_com", np.eye(3) * p.box_inertia), ("q_limit", np.inf), ("tau_limit", np.inf),
+                       ("qd_limit", np.inf), ("visual", None)):
+        bodies[key].append(value)
+    return (BoxGeom(body=nb_robot, half=np.full(3, p.box_size / 2)),)
+
+
+def cobra_model(params: CobraParameters | None = None, with_box: bool = True) -> Model:
+    """The COBRA snake (12 bodies, 11 joints) with the box as a free body, on flat ground z = 0.
+
+    Robot: nq = 18, nv = 17 (the paper's M is 17 x 17). With the box: nq = 25, nv = 23,
+    q = [head x y z qw qx qy qz, theta_0..theta_10, box x y z qw qx qy qz]. The geometry and the
+    contact spheres are the module docstring's; every number comes from ``params``.
+    """
+    p = params or CobraParameters()
+    n = p.n_body_links
+    lengths = [p.length_head] + [p.length_link] * n + [p.length_tail]
+    radii = [p.radius_head] + [p.radius_link] * n + [p.radius_tail]
+    inertias = [p.inertia_head] + [p.inertia_link] * n + [p.inertia_tail]
+    names, joints, parent, jtype, tree_pos, com = _chain_frames(lengths, p.joint_gap / 2)
     # centre of each body's cylinder in its own frame is its COM (homogeneous cylinders)
     sph = [(i, c, r) for i in range(n + 2) for c, r in _cylinder_spheres(lengths[i], radii[i], com[i][0])]
     nb_robot = n + 2
-    q_limit = [np.inf] + [p.q_max] * (n + 1)
-    tau_limit = [np.inf] + [p.tau_max] * (n + 1)
-    qd_limit = [np.inf] + [p.qd_max] * (n + 1)
-    visual = [(lengths[i], radii[i], com[i][0]) for i in range(nb_robot)]
-    I_com = [np.diag(I) for I in inertias]
-    boxes = ()
-    if with_box:
-        names.append("box")
-        joints.append("box_free")
-        parent.append(-1)
-        jtype.append("free")
-        tree_pos.append(np.zeros(3))
-        com.append(np.zeros(3))
-        masses.append(p.box_mass)
-        I_com.append(np.eye(3) * p.box_inertia)
-        q_limit.append(np.inf)
-        tau_limit.append(np.inf)
-        qd_limit.append(np.inf)
-        visual.append(None)
-        boxes = (BoxGeom(body=nb_robot, half=np.full(3, p.box_size / 2)),)
+    bodies = dict(names=names, joints=joints, parent=parent, jtype=jtype, tree_pos=tree_pos, com=com,
+                  masses=[p.mass_head] + [p.mass_link] * n + [p.mass_tail],
+                  I_com=[np.diag(I) for I in inertias],
+                  q_limit=[np.inf] + [p.q_max] * (n + 1), tau_limit=[np.inf] + [p.tau_max] * (n + 1),
+                  qd_limit=[np.inf] + [p.qd_max] * (n + 1),
+                  visual=[(lengths[i], radii[i], com[i][0]) for i in range(nb_robot)])
+    boxes = _add_box(p, bodies, nb_robot) if with_box else ()
     nb = len(names)
     return Model(
         name="cobra_box" if with_box else "cobra",
@@ -102,20 +104,20 @@ def cobra_model(params: CobraParameters | None = None, with_box: bool = True) ->
         joint_type=tuple(jtype),
         tree_pos=tuple(tree_pos),
         tree_rot=tuple(np.eye(3) for _ in range(nb)),
-        mass=tuple(float(m) for m in masses),
+        mass=tuple(float(m) for m in bodies["masses"]),
         com=tuple(com),
-        I_com=tuple(I_com),
+        I_com=tuple(bodies["I_com"]),
         gravity=np.array([0.0, 0.0, -p.gravity]),
-        q_limit=tuple(q_limit),
-        tau_limit=tuple(tau_limit),
-        qd_limit=tuple(qd_limit),
+        q_limit=tuple(bodies["q_limit"]),
+        tau_limit=tuple(bodies["tau_limit"]),
+        qd_limit=tuple(bodies["qd_limit"]),
         spheres=SphereSet(
             body=np.array([s[0] for s in sph], dtype=int),
             center=np.array([s[1] for s in sph]),
             radius=np.array([s[2] for s in sph]),
         ),
         boxes=boxes,
-        visual_cylinders=tuple(visual),
+        visual_cylinders=tuple(bodies["visual"]),
         mu=p.mu,
         mu_robot_box=p.mu_robot_box,
         mu_box_ground=p.mu_box_ground,

@@ -5,7 +5,7 @@ checks the exit status, that the message names the problem, that no traceback is
 that nothing is left behind (no temporary file, no half-written output; a run that must start
 writes only its own output). A handful run through a real subprocess to prove that no traceback
 reaches the user's terminal. Then the API (settings, parameters, the writer, the time grid, the
-box placement, a failure mid-run) and the README's generated option table.
+box placement, a failure mid-run) and the generated option tables of docs/cli.md.
 """
 
 import copy
@@ -24,8 +24,8 @@ from cobra_ref.params import CobraParameters
 from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import simulate
 from cobra_ref.step import SimulationError, StepSettings
-from cobra_ref.infra.validation import (MAX_STEPS, ValidationError, options_markdown, readme_options_block,
-                                  time_grid)
+from cobra_ref.cli.options_doc import CLI_DOC, cli_markdown, options_markdown
+from cobra_ref.infra.validation import MAX_STEPS, ValidationError, time_grid
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TINY = ["--duration", "0.01", "--quiet"]  # 10 steps: where a run must start
@@ -70,8 +70,9 @@ def inputs(tmp_path_factory):
     from cobra_ref.planning import problem as sh
     from cobra_ref.planning.results import problem_to_dict
 
-    problem = sh.make_problem("C", (0.03, -0.01), duration=0.1, ramp_time=0.05, box_gap=0.005,
-                              decision=("frequency",), bounds={"frequency": (0.5, 1.5)})
+    problem = sh.make_problem("C", (0.03, -0.01), duration=0.1, box_gap=0.005,
+                              space=sh.DecisionSpace(names=("frequency",), bounds={"frequency": (0.5, 1.5)},
+                                                     ramp_time=0.05))
     good = {"format": sh.FORMAT, "gait": "C", "params": problem.params(problem.x0), "cost": 1.0,
             "settings": problem_to_dict(problem)}
     (d / "good.json").write_text(json.dumps(good))
@@ -163,7 +164,7 @@ REFUSED = [
     ("mu-huge", ["simulate", "--mu", "5"], 2, "--mu = 5 is out of range"),
     ("mu-word", ["simulate", "--mu", "high"], 2, "--mu = 'high' is not a number"),
     ("mu-robot-box-negative", ["simulate", "--mu-robot-box=-1"], 2, "--mu-robot-box = -1 is out of range"),
-    ("box-mass-negative", ["simulate", "--box-mass=-0.1"], 2, "--box-mass = -0.1 kg is out of range (allowed: (0, 100] kg)"),
+    ("box-mass-negative", ["simulate", "--box-mass=-0.1"], 2, "--box-mass = -0.1 kg is out of range (allowed: [0.001, 100] kg)"),
     ("box-mass-zero", ["simulate", "--box-mass", "0"], 2, "--box-mass = 0 kg is out of range"),
     ("box-mass-inf", ["simulate", "--box-mass", "inf"], 2, "--box-mass = inf is not finite"),
     ("box-offset-one-number", ["simulate", "--box-offset", "0.1"], 2, "--box-offset = '0.1': expected DX,DY"),
@@ -528,7 +529,7 @@ def test_step_settings_refuse_bad_values(kwargs, message):
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(box_size=-0.1), "box_size = -0.1 m is out of range (allowed: (0, 2] m)"),
+    (dict(box_size=-0.1), "box_size = -0.1 m is out of range (allowed: [0.001, 2] m)"),
     (dict(gravity=float("nan")), "gravity = nan is not finite"),
     (dict(mu="abc"), "mu = 'abc' is not a number"),
     (dict(mu=True), "mu = True is not a number"),
@@ -612,7 +613,7 @@ def test_simulate_turns_any_step_exception_into_a_failure_that_keeps_the_run():
 
 def test_straight_start_box_beside_the_middle_on_the_left_and_box_yaw():
     from cobra_ref.contact import find_contacts
-    from cobra_ref.start import placed_state
+    from cobra_ref.start import BoxPlacement, placed_state
 
     model = cobra_model()
     straight = lambda t: (np.zeros(11), np.zeros(11), np.zeros(11))  # noqa: E731
@@ -625,7 +626,7 @@ def test_straight_start_box_beside_the_middle_on_the_left_and_box_yaw():
     # nearly straight (a C of 1 mrad) too; a real C keeps its concave side
     q = placed_state(model, gait("C", amplitude=1e-3))
     assert q[model.q_idx[model.boxes[0].body]][1] > 0.15
-    q = placed_state(model, straight, box_yaw=0.3)
+    q = placed_state(model, straight, BoxPlacement(yaw=0.3))
     quat = q[model.q_idx[model.boxes[0].body]][3:]
     assert 2 * np.arctan2(quat[3], quat[0]) == pytest.approx(0.3)
 
@@ -697,18 +698,23 @@ def test_trajectory_to_npz_keeps_the_exact_name(tmp_path):
     assert len(Trajectory.from_npz(str(tmp_path / "run")).t) == 3
 
 
-# ------------------------------------------------------------------------------ the README's table
+# ---------------------------------------------------------------------------- docs/cli.md's tables
 
-def test_the_readme_option_table_is_the_generated_one():
+def test_docs_cli_md_is_the_generated_one():
+    with open(os.path.join(ROOT, CLI_DOC), encoding="utf-8") as f:
+        committed = f.read()
+    assert committed == cli_markdown(), "docs/cli.md is stale: run `python -m cobra_ref.cli.options_doc`"
+
+
+def test_the_readme_links_the_option_tables_instead_of_holding_them():
     with open(os.path.join(ROOT, "README.md"), encoding="utf-8") as f:
         readme = f.read()
-    assert readme_options_block(readme) == options_markdown(), \
-        "README.md's option table is stale: run `python -m cobra_ref.infra.validation README.md`"
+    assert "(docs/cli.md)" in readme and "| `--dt` |" not in readme
 
 
 def test_the_option_table_names_every_option_with_unit_and_range():
     table = options_markdown()
     for row in ("| `--dt` | s | [1e-5, 0.005] | 0.001 |", "| `--mu` | - | [0, 2] | 1.0 |",
-                "| `--box-mass` | kg | (0, 100] | 0.5 |", "| `--timestep` | s | [1e-6, 0.002] | 0.0001 |",
+                "| `--box-mass` | kg | [0.001, 100] | 0.5 |", "| `--timestep` | s | [1e-6, 0.002] | 0.0001 |",
                 "| `--box-offset` | m | DX,DY: each [-5, 5] | - |"):
         assert row in table, row

@@ -1,6 +1,6 @@
 """``cobra-ref bench``: time per step of the full model, broken down, against MuJoCo on the same MJCF.
 
-Helper: the command-line side of :mod:`cobra_ref.reproduce.bench`.
+The command-line side of :mod:`cobra_ref.reproduce.bench`.
 """
 
 from __future__ import annotations
@@ -8,25 +8,23 @@ from __future__ import annotations
 import json
 
 from ..infra.progress import progress_printer
-from ..infra.validation import RULES, ValidationError, time_grid
+from ..infra.validation import DEFAULT_DT, RULES, ValidationError, step_count
 from .common import c_stdout_silenced, check_out, fail, write_text_atomic
 
 
 def cmd_bench(args) -> int:
-    """Time per step of the full model while rolling with the box, and MuJoCo's on the same MJCF.
-
-    Helper: the command line (cobra-ref bench).
-    """
+    """``cobra-ref bench``: time per step of the full model while rolling with the box, at
+    ``DEFAULT_DT``, and MuJoCo's on the same MJCF."""
     from ..reproduce.bench import format_table, run_bench
 
     if args.json is not None:
         check_out(args.json, "--json")
     try:
-        time_grid(args.duration, 1e-3, exact=True, duration_field="--duration", dt_field="the benchmark's dt")
+        step_count(args.duration, DEFAULT_DT, exact=True, duration_field="--duration", dt_field="the benchmark's dt")
     except ValidationError as exc:
         raise fail(exc) from None
     with c_stdout_silenced():
-        record = run_bench(args.duration, with_mujoco=not args.no_mujoco,
+        record = run_bench(args.duration, DEFAULT_DT, with_mujoco=not args.no_mujoco,
                            progress=None if args.quiet else progress_printer("bench"))
     print(format_table(record))
     if args.json is not None:
@@ -36,13 +34,10 @@ def cmd_bench(args) -> int:
 
 
 def add_parsers(sub) -> None:
-    """The ``bench`` subcommand.
-
-    Helper: the command line (cobra-ref bench).
-    """
+    """Add the ``bench`` subcommand to ``sub``."""
     p = sub.add_parser("bench", help="time per step against MuJoCo on the same model (a benchmark)")
     p.add_argument("--duration", type=RULES["bench_duration"].arg("--duration"), default=2.0,
-                   help="simulated time [s] at dt = 1 ms, a whole number of steps (default 2)")
+                   help=f"simulated time [s] at dt = {DEFAULT_DT * 1e3:g} ms, a whole number of steps (default 2)")
     p.add_argument("--json", metavar="FILE", help="also write the record as JSON (exactly this name)")
     p.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo comparison")
     p.add_argument("--quiet", action="store_true", help="no progress line")

@@ -1,6 +1,6 @@
 """What every ``cobra-ref`` subcommand shares: argument types, output checks, quiet C libraries.
 
-Helper: conventions of the command line. Every input is checked before the long run, by the
+Conventions of the command line. Every input is checked before the long run, by the
 rules of :mod:`cobra_ref.infra.validation` (an option's ``type=``, or ``fail`` with the rule's
 message: exit status 2 for a malformed option, 1 for input refused after parsing, never a
 traceback); every output by :func:`cobra_ref.infra.output.check_output` (exact name, regular files
@@ -16,6 +16,7 @@ import contextlib
 import json
 import os
 import sys
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -105,13 +106,26 @@ def _keep_partial(traj, out: str) -> str:
     return f"what was computed up to the failure is in {failed}"
 
 
-def run_and_write(model, reference, duration, settings, out, label, quiet=False, q0=None, qd0=None,
-                  meta=None, summary=None, stepper="fast"):
-    """Simulate, write the NPZ and print the one-line JSON summary (plus ``summary(traj)``'s keys);
-    a failure mid-run (any exception of the step, or Ctrl-C) writes what was computed to
-    OUT.failed.npz and exits with the error, which names the step and the time.
+@dataclass(frozen=True)
+class Job:
+    """One simulation for ``run_and_write``: the model, the reference, ``duration`` [s] on the grid of
+    ``settings.dt`` (both checked by the command before), the start (None: ``start.initial_state``),
+    the stepper."""
 
-    Helper: shared by every cobra-ref subcommand.
+    model: object
+    reference: object
+    duration: float
+    settings: object
+    q0: object = None
+    qd0: object = None
+    stepper: str = "fast"
+
+
+def run_and_write(job: Job, out: str, label: str, quiet: bool = False, meta=None, summary=None):
+    """Simulate ``job``, write the NPZ to ``out`` and print the one-line JSON summary (plus
+    ``summary(traj)``'s keys); a failure mid-run (any exception of the step, or Ctrl-C) writes what
+    was computed to OUT.failed.npz and exits with the error, which names the step and the time.
+    ``meta`` is added to the trajectory's meta; ``label`` names the progress line (none if ``quiet``).
     """
     from ..simulate import simulate
     from ..step import SimulationError
@@ -119,7 +133,8 @@ def run_and_write(model, reference, duration, settings, out, label, quiet=False,
     progress = None if quiet else progress_printer(label)
     try:
         with c_stdout_silenced():
-            traj = simulate(model, reference, duration, settings, q0, qd0, progress=progress, stepper=stepper)
+            traj = simulate(job.model, job.reference, job.duration, job.settings, job.q0, job.qd0,
+                            progress=progress, stepper=job.stepper)
     except SimulationError as exc:
         if exc.trajectory is None:  # bad input: nothing was computed, nothing is written
             raise fail(exc) from None

@@ -18,7 +18,7 @@ def cmd_figures(args) -> int:
 
     Helper: the command line (cobra-ref figures).
     """
-    from ..reproduce.regenerate import OPTIMIZED_DIR, check_output_dir, regenerate
+    from ..reproduce.regenerate import OPTIMIZED_DIR, FiguresOptions, check_output_dir, regenerate
     from ..reproduce.runs import PAPER_GAITS
 
     gaits = PAPER_GAITS if args.gaits is None else tuple(g.strip() for g in args.gaits.split(","))
@@ -31,10 +31,10 @@ def cmd_figures(args) -> int:
     except OSError as exc:
         raise SystemExit(f"error: {exc}")
     with c_stdout_silenced():
-        result = regenerate(args.out, quick=args.quick, force=args.force, cache_dir=args.cache,
-                            workers=args.jobs, mujoco=not args.no_mujoco, progress=not args.quiet, gaits=gaits,
-                            optimized_dir=None if args.defaults else OPTIMIZED_DIR,
-                            reoptimize_all=args.reoptimize, n_members=args.members)
+        options = FiguresOptions(quick=args.quick, force=args.force, mujoco=not args.no_mujoco, gaits=gaits,
+                                 n_members=args.members, optimized_dir=None if args.defaults else OPTIMIZED_DIR,
+                                 reoptimize_all=args.reoptimize)
+        result = regenerate(args.out, options, cache_dir=args.cache, workers=args.jobs, progress=not args.quiet)
     summary = {"out": args.out, "files": len(result["files"]),
                "claims": {c["id"]: c.get("verdict", c["holds"]) for c in result["claims"]},
                "seconds": round(result["seconds"], 1)}

@@ -1,6 +1,6 @@
 """``cobra-ref optimize`` (single shooting) and the ``--params`` replay of ``cobra-ref simulate``.
 
-Helper: the command-line side of :mod:`cobra_ref.planning` (conventions: :mod:`cobra_ref.cli.common`).
+The command-line side of :mod:`cobra_ref.planning` (conventions: :mod:`cobra_ref.cli.common`).
 """
 
 from __future__ import annotations
@@ -11,10 +11,11 @@ import sys
 import numpy as np
 
 from ..infra.executors import SerialExecutor
-from ..planning.problem import DECISION, DEFAULTS, RAMP_TIME, ShootingError, Weights, make_problem
+from ..planning.problem import DECISION, DEFAULTS, RAMP_TIME, DecisionSpace, ShootingError, Weights, make_problem
 from ..planning.results import summary_lines, write_result
-from ..planning.search import optimize
-from ..infra.validation import RULES
+from ..planning.search import SearchOptions, optimize
+from ..step import StepSettings
+from ..infra.validation import DEFAULT_DT, RULES, ValidationError
 from .common import add_model_options, c_stdout_silenced, check_writable, model_parameters
 
 
@@ -35,10 +36,7 @@ def _assignments(items, n_values: int, what: str) -> dict:
 
 
 def add_parsers(sub) -> None:
-    """The ``optimize`` subcommand.
-
-    Helper: the command line (cobra-ref optimize).
-    """
+    """Add the ``optimize`` subcommand to ``sub``."""
     w = Weights()
     goals = "; ".join(f"{g} {x:g},{y:g} in {T:g} s, {n} iterations" for g, ((x, y), T, n) in DEFAULTS.items())
     p = sub.add_parser(
@@ -59,7 +57,8 @@ def add_parsers(sub) -> None:
                         f"--maxiter) per gait: {goals}")
     p.add_argument("--duration", type=RULES["horizon"].arg("--duration"), default=None,
                    help="horizon of each rollout [s] (default per gait: 1.5, sidewinding 3)")
-    p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=1e-3, help="time step [s] (default 1e-3)")
+    p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=DEFAULT_DT,
+                   help=f"time step [s] (default {DEFAULT_DT * 1e3:g} ms)")
     p.add_argument("--ramp-time", type=RULES["ramp_time"].arg("--ramp-time"), default=RAMP_TIME,
                    help=f"ramp-in of the gait's phase rate [s] (default {RAMP_TIME})")
     p.add_argument("--servo", choices=("position", "prescribed"), default="position",
@@ -107,17 +106,18 @@ def cmd_optimize(args) -> int:
     err = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
     with c_stdout_silenced():  # OSQP's "Polishing not needed" lines (workers: parallel.worker_init)
         try:
-            problem = make_problem(args.gait, goal, duration=duration, dt=args.dt, ramp_time=args.ramp_time,
-                                   box_gap=args.box_gap, servo=args.servo, contact=args.contact,
-                                   cobra=model_parameters(args),
-                                   bounds=_assignments(args.bound, 2, "--bound"),
-                                   x0=_assignments(args.start, 1, "--start"))
-        except ShootingError as exc:
+            space = DecisionSpace(bounds=_assignments(args.bound, 2, "--bound"),
+                                  x0=_assignments(args.start, 1, "--start"), ramp_time=args.ramp_time)
+            settings = StepSettings(dt=args.dt, contact=args.contact, servo=args.servo)
+            problem = make_problem(args.gait, goal, duration, settings, space, box_gap=args.box_gap,
+                                   cobra=model_parameters(args))
+        except (ShootingError, ValidationError) as exc:
             raise SystemExit(f"error: {exc}") from None
         err(f"optimize {args.gait}: goal {goal} m from the box's start {np.round(problem.box_pose0[:2], 4)}, "
             f"{len(problem.names)} parameters ({', '.join(problem.names)}), {duration} s rollouts, maxiter {maxiter}")
-        result = optimize(problem, method=args.method, maxiter=maxiter, seed=args.seed,
-                          popsize=args.popsize, companion=args.companion, progress=None if args.quiet else err,
+        search = SearchOptions(method=args.method, maxiter=maxiter, seed=args.seed, popsize=args.popsize,
+                               companion=args.companion)
+        result = optimize(problem, search, progress=None if args.quiet else err,
                           executor=SerialExecutor() if args.workers == 1 else None, workers=args.workers)
     record = write_result(result, args.out)
     for line in summary_lines(result):

@@ -1,6 +1,6 @@
 """``cobra-ref simulate``: one simulation of COBRA and the box, written to an NPZ, summarized in JSON.
 
-Helper: the command-line side of :func:`cobra_ref.simulate.simulate`; ``--params`` replays an
+The command-line side of :func:`cobra_ref.simulate.simulate`; ``--params`` replays an
 optimum of ``cobra-ref optimize`` (:mod:`cobra_ref.planning.results`). Every input is checked
 before the run (:mod:`cobra_ref.infra.validation`): the options, the reference (angles within q_max,
 rates against qd_max), the time grid, the output; each option is recorded in the NPZ's ``meta``
@@ -18,8 +18,9 @@ from ..planning.cost import shooting_cost
 from ..planning.problem import ShootingError
 from ..planning.results import ParamsRun, params_reference
 from ..robots import cobra_model
-from ..infra.validation import RULES, ValidationError, time_grid
-from .common import add_model_options, c_stdout_silenced, check_out, fail, gait_param, model_parameters, run_and_write
+from ..infra.validation import DEFAULT_DT, RULES, ValidationError, step_count
+from .common import (Job, add_model_options, c_stdout_silenced, check_out, fail, gait_param, model_parameters,
+                     run_and_write)
 
 DEFAULT_DURATION = 10.0  # [s] (assumption A11)
 # options that change the model or the start: not with --params, which replays the optimum's own
@@ -30,10 +31,9 @@ MODEL_OPTIONS = (("mu", "--mu"), ("mu_robot_box", "--mu-robot-box"), ("mu_box_gr
 
 
 def cmd_simulate(args) -> int:
-    """Simulate COBRA and the box; write the trajectory NPZ; print a one-line JSON summary.
-
-    Helper: the command line (cobra-ref simulate).
-    """
+    """``cobra-ref simulate``: simulate COBRA and the box; write the trajectory NPZ; print a
+    one-line JSON summary. Every input is checked before the run; ``--params`` hands over to
+    ``cmd_simulate_params``."""
     if args.params:
         return cmd_simulate_params(args)
     from ..reference import ReferenceError, builtin_reference, check_reference, load_reference
@@ -47,10 +47,10 @@ def cmd_simulate(args) -> int:
     if args.box_offset is not None and args.box_gap is not None:
         raise fail("--box-gap places the box beside the middle link, --box-offset places it at an offset from "
                    "the middle: give one of them")
-    try:
+    try:  # --dt is checked by its option's rule: trusted here
         settings = StepSettings(dt=args.dt, contact=args.contact, servo=args.servo)
         duration = DEFAULT_DURATION if args.duration is None else args.duration
-        time_grid(duration, settings.dt, exact=True, duration_field="--duration", dt_field="--dt")
+        step_count(duration, args.dt, exact=True, duration_field="--duration", dt_field="--dt")
         cobra = model_parameters(args)
     except ValueError as exc:  # ValidationError
         raise fail(exc) from None
@@ -70,8 +70,8 @@ def cmd_simulate(args) -> int:
     meta = {"options": _options(args, duration), "cobra_parameters": dataclasses.asdict(cobra),
             "reference": args.reference, "gait": None if args.reference else args.gait,
             "gait_params": None if args.reference else gait_params(reference)}
-    run_and_write(model, reference, duration, settings, args.out, f"simulate {source}", args.quiet, q0, qd0,
-                  meta, stepper=args.stepper)
+    run_and_write(Job(model, reference, duration, settings, q0, qd0, args.stepper), args.out, f"simulate {source}",
+                  args.quiet, meta)
     return 0
 
 
@@ -89,19 +89,19 @@ def _start(model, reference, settings, args):
     """(q0, qd0): the placed and settled start with the box options (``start.initial_state``); a
     placement deep in the ground or the box is refused before it settles."""
     from ..simulate import check_start
-    from ..start import initial_state, placed_state
+    from ..start import BoxPlacement, initial_state, placed_state
     from ..step import SimulationError
 
     gap = 0.05 if args.box_gap is None else args.box_gap
+    placement = BoxPlacement(offset=args.box_offset, gap=gap, yaw=args.box_yaw)
     try:
-        check_start(model, placed_state(model, reference, args.box_offset, gap, box_yaw=args.box_yaw))
+        check_start(model, placed_state(model, reference, placement))
     except SimulationError as exc:
         hint = "; place the box elsewhere with --box-offset DX,DY or --box-gap" if "robot-box" in str(exc) else ""
         raise fail(f"{exc}{hint}") from None
     try:
         with c_stdout_silenced():
-            return initial_state(model, reference, settings, box_offset=args.box_offset, box_gap=gap,
-                                 box_yaw=args.box_yaw)
+            return initial_state(model, reference, settings, placement, stepper=args.stepper)
     except Exception as exc:  # noqa: BLE001 -- the settling steps can fail in any solver
         raise fail(f"the start could not be placed and settled: {type(exc).__name__}: {exc}") from None
 
@@ -129,10 +129,7 @@ gait_name.allowed = ", ".join(GAITS)
 
 
 def add_parsers(sub) -> None:
-    """The ``simulate`` subcommand.
-
-    Helper: the command line (cobra-ref simulate).
-    """
+    """Add the ``simulate`` subcommand to ``sub``."""
     p = sub.add_parser("simulate", help="simulate COBRA pushing the box; write an NPZ, print a JSON summary",
                        description="Simulate COBRA and the box on flat ground for a joint reference. Writes every "
                                    "array (t, q, qd, tau, box_pose, per-step solver records, the contact log) to "
@@ -153,7 +150,8 @@ def add_parsers(sub) -> None:
     p.add_argument("--duration", type=RULES["duration"].arg("--duration"), default=None,
                    help=f"simulated time [s], a whole number of steps (default {DEFAULT_DURATION:g}; with --params "
                         "the optimization's horizon)")
-    p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=1e-3, help="time step [s] (default 1e-3)")
+    p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=DEFAULT_DT,
+                   help=f"time step [s] (default {DEFAULT_DT * 1e3:g} ms)")
     p.add_argument("--contact", choices=("compliant", "rigid"), default="compliant",
                    help="contact law: compliant (default, the paper's spring-damper contact) or rigid "
                         "(eq. (2)-(6) as written)")
@@ -180,10 +178,9 @@ def add_parsers(sub) -> None:
 def cmd_simulate_params(args) -> int:
     """``cobra-ref simulate --params FILE``: replay the optimum (its gait, parameters, start state,
     dt and, unless ``--duration`` is given, horizon); write the NPZ; print the JSON summary with the
-    replayed and the recorded cost.
-
-    Helper: ``cobra_ref.cli.cmd_simulate`` hands over when ``args.params`` is set (uses
-    ``args.params``, ``args.duration`` (None = the JSON's), ``args.out``, ``args.quiet``).
+    replayed and the recorded cost. ``cmd_simulate`` hands over when ``args.params`` is set; this
+    uses ``args.params``, ``args.duration`` (None = the JSON's), ``args.out``, ``args.quiet`` and
+    ``args.stepper``.
     """
     from ..reference import ReferenceError, check_reference
     from ..step import SimulationError
@@ -195,15 +192,15 @@ def cmd_simulate_params(args) -> int:
                        "with it")
     try:
         run = params_reference(args.params, duration=args.duration)
-        cobra = run.problem.cobra_parameters()
+        cobra = run.problem.cobra
         for line in check_reference(run.reference, run.duration, cobra.q_max, cobra.qd_max, f"gait {run.gait}"):
             print(f"warning: {line}", file=sys.stderr)
     except (ShootingError, ReferenceError, ValidationError, SimulationError) as exc:
         raise fail(exc) from None
     meta = {"gait": run.gait, "gait_params": gait_params(run.reference), "params_file": args.params,
             "options": {"params": args.params, "duration": run.duration, "stepper": args.stepper}}
-    run_and_write(run.model, run.reference, run.duration, run.settings, args.out, f"simulate {args.params}",
-                  args.quiet, run.q0, run.qd0, meta, lambda traj: params_summary(run, traj), stepper=args.stepper)
+    job = Job(run.model, run.reference, run.duration, run.settings, run.q0, run.qd0, args.stepper)
+    run_and_write(job, args.out, f"simulate {args.params}", args.quiet, meta, lambda traj: params_summary(run, traj))
     return 0
 
 

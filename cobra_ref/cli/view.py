@@ -64,7 +64,7 @@ def cmd_render(args) -> int:
     Helper: the command line (cobra-ref render).
     """
     from ..infra.progress import progress_printer
-    from ..viz.render import RenderError, output_format, render_file
+    from ..viz.render import RenderError, VideoSettings, output_format, render_file
 
     try:
         output_format(args.out)
@@ -73,8 +73,9 @@ def cmd_render(args) -> int:
     check_out(args.out, "--out")
     traj = read_run(args.run)
     try:
-        info = render_file(traj, args.out, fps=args.fps, width=args.width, height=args.height, at=args.at,
-                           speed=args.speed, force_scale=args.force_scale, renderer=args.renderer,
+        video = VideoSettings(fps=args.fps, width=args.width, height=args.height, speed=args.speed,
+                              force_scale=args.force_scale)
+        info = render_file(traj, args.out, video, at=args.at, renderer=args.renderer,
                            progress=None if args.quiet else progress_printer(f"render {args.out}"))
     except RenderError as exc:
         raise SystemExit(f"error: {exc}") from None
