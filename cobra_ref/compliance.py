@@ -44,12 +44,13 @@ per halving of dt (tests/test_servo.py). One joint's step is stable for every I 
 map of (e, dt qd) has its eigenvalues inside the unit circle when
 kp dt^2 (1 - 2 theta) < 4 I + 2 (2 theta_d - 1) kd dt, which these thetas meet.
 
-The rows (assumption ids refer to ``docs/assumptions.md``):
+The rows (assumption ids refer to ``docs/assumptions.md``), each law and servo an object that
+``StepSettings`` resolves once from its name (``CONTACT_LAWS``, ``JOINT_SERVOS``):
 
-* contact normal, ``law="compliant"`` (A12): k = ``model.contact_stiffness``, d =
+* contact normal, ``CompliantLaw`` (A12): k = ``model.contact_stiffness``, d =
   ``model.contact_damping`` on the gap e = g, the spring at ``contact_theta``; a unilateral row
   (x >= 0), so the force is max(0, -k g - d g') as in Simscape's spring-damper contact.
-  ``law="rigid"``: eq. (2)-(6) as written, the gap closes in one step (b = g / dt; a
+  ``RigidLaw``: eq. (2)-(6) as written, the gap closes in one step (b = g / dt; a
   penetration is removed at the rate beta g / dt, ``BAUMGARTE``), with the small compliance
   R = ``RIGID_COMPLIANCE`` G_ii of MuJoCo's impedance (A15), so that redundant contacts get one
   force split;
@@ -57,16 +58,16 @@ The rows (assumption ids refer to ``docs/assumptions.md``):
   whose sticking branch f_T = -(mu f_N / v_s) v_T is the row compliance R = v_s / (mu pbar_N)
   (pbar_N: the normal impulse of the friction fixed point, :mod:`cobra_ref.least_action`);
   rigid: R = ``RIGID_COMPLIANCE`` G_ii;
-* joint servo (A7): tau = kp (q_ref - q) + kd (qd_ref - qd), the spring at the step's start and
+* joint servo, ``PositionServo`` (A7): tau = kp (q_ref - q) + kd (qd_ref - qd), the spring at the step's start and
   the damper on the mean rate (above), both against the reference at the step's start, its
-  impulse bounded by tau_max dt.
+  impulse bounded by tau_max dt; ``PrescribedServo`` has no rows (its joints move to their
+  reference, and their torques are recovered from eq. (1)).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-LAWS = ("compliant", "rigid")
 RIGID_COMPLIANCE = 1e-2  # R = RIGID_COMPLIANCE * G_ii for rigid rows (MuJoCo's impedance d = 1 / (1 + 1e-2))
 BAUMGARTE = 0.2  # rigid contact: fraction of a penetration removed per step
 
@@ -91,29 +92,61 @@ def contact_theta(k, d, dt: float):
     return np.maximum(0.0, 1.0 - np.asarray(d, dtype=float) / (np.asarray(k, dtype=float) * dt))
 
 
-def normal_rows(model, g: np.ndarray, G_NN: np.ndarray, dt: float, law: str):
-    """(R_N, b_N): compliance and offset of the contacts' normal rows, (m,) each.
+class CompliantLaw:
+    """The compliant contact law (assumptions A12-A13): a spring-damper on the gap, smooth
+    stick-slip friction (module docstring)."""
 
-    Implements: the normal contact law of the module docstring: compliant (spring-damper on the
-    gap, assumption A12) or rigid (Signorini at the velocity level with Baumgarte stabilization
-    of a penetration and MuJoCo's small compliance, A15).
-    """
-    if law == "compliant":
+    name = "compliant"
+
+    def normal_rows(self, model, g: np.ndarray, G_NN: np.ndarray, dt: float):
+        """(R_N, b_N) (m,) each: the spring-damper on the gap, its spring at ``contact_theta``.
+
+        Implements: the compliant normal contact law of the module docstring (A12).
+        """
         k, d = model.contact_stiffness, model.contact_damping
         return spring_damper(k, d, dt, g, theta=contact_theta(k, d, dt))
-    # rigid: a gap closes at most within the step (g / dt); a penetration is removed gradually
-    b = np.where(g >= 0.0, g, BAUMGARTE * g) / dt
-    return RIGID_COMPLIANCE * G_NN, b
+
+    def tangential_compliance(self, G_TT: np.ndarray) -> np.ndarray:
+        """0: the friction rows' compliance depends on the normal impulse (``stick_slip_compliance``)."""
+        return np.zeros_like(G_TT)
+
+    def stiction_velocity(self, model) -> float:
+        """v_s [m/s] of the smooth stick-slip friction (A13)."""
+        return model.stiction_velocity
+
+    def elastic_energy(self, model, g: np.ndarray) -> float:
+        """sum 1/2 k g^2 [J] over the compressed contacts (g < 0)."""
+        return float(0.5 * model.contact_stiffness * np.sum(np.minimum(g, 0.0) ** 2))
 
 
-def tangential_compliance(G_TT: np.ndarray, law: str) -> np.ndarray:
-    """The part of the friction rows' compliance that does not depend on the normal impulse.
+class RigidLaw:
+    """The rigid contact law (A15): eq. (2)-(6) as written, with MuJoCo's small compliance."""
 
-    Implements: the rigid law's small compliance RIGID_COMPLIANCE G_TT (assumption A15); the
-    compliant law's friction compliance depends on the normal impulse (``stick_slip_compliance``),
-    so its constant part is 0.
-    """
-    return RIGID_COMPLIANCE * G_TT if law == "rigid" else np.zeros_like(G_TT)
+    name = "rigid"
+
+    def normal_rows(self, model, g: np.ndarray, G_NN: np.ndarray, dt: float):
+        """(R_N, b_N) (m,) each: Signorini at the velocity level, a gap closing at most within the
+        step (b = g / dt), a penetration removed at the rate BAUMGARTE g / dt, R = RIGID_COMPLIANCE G_NN.
+
+        Implements: the rigid normal contact law of the module docstring (A15).
+        """
+        b = np.where(g >= 0.0, g, BAUMGARTE * g) / dt
+        return RIGID_COMPLIANCE * G_NN, b
+
+    def tangential_compliance(self, G_TT: np.ndarray) -> np.ndarray:
+        """RIGID_COMPLIANCE G_TT: the friction rows' small compliance (A15)."""
+        return RIGID_COMPLIANCE * G_TT
+
+    def stiction_velocity(self, model) -> float:
+        """0: no stick-slip law, Coulomb's friction as written."""
+        return 0.0
+
+    def elastic_energy(self, model, g: np.ndarray) -> float:
+        """0: a rigid contact stores no energy."""
+        return 0.0
+
+
+CONTACT_LAWS = {"compliant": CompliantLaw(), "rigid": RigidLaw()}  # StepSettings.contact -> its law
 
 
 STICK_SLIP_MAX = 1e3  # a stick-slip compliance is capped at STICK_SLIP_MAX G_TT (a nearly unloaded contact)
@@ -162,3 +195,66 @@ def servo_rows(model, q_joint, qd_joint, q_ref, qd_ref, G_ss, dt: float):
     theta, theta_d = servo_theta(G_ss, kp, kd, dt)
     v_ref = (np.asarray(qd_ref, dtype=float) - (1.0 - theta_d) * np.asarray(qd_joint, dtype=float)) / theta_d
     return spring_damper(kp, theta_d * kd, dt, np.asarray(q_joint, dtype=float) - q_ref, v_ref, theta)
+
+
+class PositionServo:
+    """The paper's position-controlled joints (A7): every coordinate is free and each joint gets a
+    servo row towards the reference at the step's start, its impulse bounded by tau_max dt."""
+
+    name = "position"
+    reads_start = True  # its rows are written from the reference at the step's start
+
+    def free(self, nv: int, joints) -> np.ndarray:
+        """The free coordinates F: all of them."""
+        return np.arange(nv)
+
+    def prescribe(self, qd_next: np.ndarray, q, q_ref, joints, dt: float) -> None:
+        """Nothing: no coordinate moves by prescription."""
+
+    def jacobian(self, nv: int, joints) -> np.ndarray:
+        """The servo rows' Jacobian: one unit row per joint rate."""
+        return np.eye(nv)[joints.v]
+
+    def rows(self, model, start, G_ss, dt: float):
+        """(R_s, b_s, lo, hi) of the servo rows: ``servo_rows`` from ``start`` (the joints and their
+        state at the step's start: ``joints``, ``q``, ``qd``, ``reference`` = (q_ref, qd_ref)), bounded
+        by -+tau_max dt."""
+        R, b = servo_rows(model, start.q, start.qd, *start.reference, G_ss, dt)
+        return R, b, -start.joints.tau_max * dt, start.joints.tau_max * dt
+
+    def torque(self, x_servo: np.ndarray, dt: float, recovered) -> np.ndarray:
+        """The joint torques: the servo rows' impulses over dt (``recovered`` is not called)."""
+        return x_servo / dt
+
+
+class PrescribedServo:
+    """Prescribed joints (Simscape's "motion provided"): each joint's rate after the step is the
+    secant to its reference, (q_ref(t + dt) - q) / dt; only the base and the box are free, and the
+    torques are recovered from eq. (1)."""
+
+    name = "prescribed"
+    reads_start = False  # no rows: the reference at the step's start is not read
+
+    def free(self, nv: int, joints) -> np.ndarray:
+        """The free coordinates F: all but the joints'."""
+        return np.setdiff1d(np.arange(nv), joints.v)
+
+    def prescribe(self, qd_next: np.ndarray, q, q_ref, joints, dt: float) -> None:
+        """qd_next's joint rates set (in place) to the secant (q_ref - q) / dt."""
+        qd_next[joints.v] = (q_ref - q[joints.q]) / dt
+
+    def jacobian(self, nv: int, joints) -> np.ndarray:
+        """No servo rows."""
+        return np.zeros((0, nv))
+
+    def rows(self, model, start, G_ss, dt: float):
+        """No servo rows: empty (R_s, b_s, lo, hi)."""
+        return np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0)
+
+    def torque(self, x_servo: np.ndarray, dt: float, recovered) -> np.ndarray:
+        """The joint torques recovered from eq. (1): ``recovered()``."""
+        return recovered()
+
+
+JOINT_SERVOS = {"position": PositionServo(), "prescribed": PrescribedServo()}  # StepSettings.servo -> its servo
+LAWS, SERVOS = tuple(CONTACT_LAWS), tuple(JOINT_SERVOS)

@@ -33,22 +33,15 @@ or inside the circle, is the minimiser over the circle. The loop::
 
 ``guess`` solves the exact conditions of Coulomb's law on the active set of x (which contacts
 are released, which stick, which slide, which servo rows saturate) by Newton's method
-(``coulomb_newton``): when that set is right, the next QP reproduces its guesses and the loop
-stops (measured on the paper's gaits: about one QP per step). Where Newton's method fails or
-predicts normal impulses more than ``NEWTON_MAX_GROWTH`` times the QP's (a wrong active set),
-the plain update pbar_N <- p_N, theta_i <- angle of z_i is taken instead, with
-z_i = p_T,i - r_T,i / a_i (a_i the mean of contact i's tangential diagonal of G + R: where its
-friction would go without a bound). The plain update can cycle: on a step of the reliability
-sweep (scenario 77, J-mirror with prescribed joints, mu = 1.38, 17 contacts) it alternates
-between two guesses whose residuals stay at 0.48 and 0.61 for all 50 iterates, Newton's method
-failing on both. From iterate ``FP_RELAX_AFTER`` on, each new guess is therefore averaged with
-the last one, pbar_N <- (pbar_N_last + pbar_N) / 2 (a Krasnosel'skii-Mann step, which turns a
-2-cycle into a contraction towards its midpoint): that step then converges at iterate 30. The
-friction directions are averaged too (``mean_angle``): on a step of scenario 42 (S, a 0.11 kg box
-wedged against the ground, mu = 1.38, 17 contacts) the normal impulses alone averaged, the
-guesses still alternate with residuals 0.152 and 0.161 for 1000 iterates; with the directions
-averaged as well the step converges at iterate 25. The paper's runs converge within 4 iterates,
-so the averaging never acts on them. The natural residual of Coulomb's law::
+(:func:`cobra_ref.coulomb_newton.coulomb_newton`): when that set is right, the next QP
+reproduces its guesses and the loop stops. Where Newton's method fails or predicts normal
+impulses more than ``NEWTON_MAX_GROWTH`` times the QP's (a wrong active set), the plain update
+pbar_N <- p_N, theta_i <- angle of z_i is taken instead, with z_i = p_T,i - r_T,i / a_i (a_i the
+mean of contact i's tangential diagonal of G + R: where its friction would go without a bound).
+The plain update can cycle between two guesses; from iterate ``FP_RELAX_AFTER`` on, each new
+guess is therefore averaged with the last one, pbar_N <- (pbar_N_last + pbar_N) / 2 (a
+Krasnosel'skii-Mann step, which turns a 2-cycle into a contraction towards its midpoint), and
+so are the friction directions (``mean_angle``). The natural residual of Coulomb's law::
 
     max_i max( |p_N,i - pbar_N,i|,  |p_T,i - P_{mu_i p_N,i}(z_i)| )        (P_r: onto the disk r)
 
@@ -57,7 +50,7 @@ is zero exactly when the bounds used the right normal impulses and every contact
 is finally projected onto the circle of its own p_N, so ||p_T|| <= mu p_N holds on every step
 exactly. If ``max_iter`` iterates do not reach the tolerance, the last iterate, projected the
 same way, is the answer (a continuous function of the step's input that keeps friction), and
-the step's record says so.
+the step's record says so. How often each case occurs: docs/results.md, "Friction fixed point".
 """
 
 from __future__ import annotations
@@ -65,19 +58,14 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy.linalg import get_lapack_funcs
 
-from .compliance import STICK_SLIP_MAX, stick_slip_compliance
+from .coulomb_newton import RELEASED, coulomb_newton, coulomb_split, hessian
 from .qp import solve_box_qp
 
 FP_TOL = 1e-6  # natural residual of Coulomb's law, relative to max p_N
 FP_MAX = 50  # friction fixed-point iterates per step
 FP_RELAX_AFTER = 10  # from this iterate on, each new guess (pbar_N, theta) is averaged with the last one
 NEWTON_MAX_GROWTH = 3.0  # a Newton guess may at most triple the sum of the normal impulses
-RELEASED = 1e-9  # a contact whose normal impulse is below RELEASED max p_N carries nothing
-NEWTON_TOL = 1e-6  # Newton's iterations stop when a step changes no impulse by more than this (relative)
-_SQRT_NEWTON_TOL = np.sqrt(NEWTON_TOL)
-_gesv = get_lapack_funcs("gesv", (np.zeros(1),))
 
 
 class LeastAction(NamedTuple):
@@ -158,57 +146,16 @@ def solve_least_action(problem: LeastAction, x_start=None, solve_qp=solve_box_qp
 def mean_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The direction of e(a) + e(b), e(t) = (cos t, sin t), elementwise; b where e(a) = -e(b).
 
-    Helper: the averaged friction directions of the fixed point's relaxed update.
+    The averaged friction directions of the fixed point's relaxed update.
     """
     s, c = np.sin(a) + np.sin(b), np.cos(a) + np.cos(b)
     return np.where(np.hypot(s, c) > 1e-12, np.arctan2(s, c), b)
 
 
-def hessian(problem: LeastAction, pbar_N: np.ndarray, R_T=None) -> np.ndarray:
-    """G + R of an iterate: the problem's H with the stick-slip compliance of pbar_N (or R_T) added.
-
-    Helper: the QP matrix of one fixed-point iterate (compliant law; the rigid law adds 0).
-    """
-    m, H = problem.m, problem.H.copy()
-    R_T = stick_slip(problem, pbar_N) if R_T is None else R_T
-    diagonal = H.reshape(-1)[::len(H) + 1]  # a view of H's diagonal
-    diagonal[1:3 * m:3] += R_T
-    diagonal[2:3 * m:3] += R_T
-    return H
-
-
-def residual(problem: LeastAction, x: np.ndarray, pbar_N: np.ndarray) -> np.ndarray:
-    """r = (G + R) x + c with the stick-slip compliance of pbar_N: each row's law residual.
-
-    Helper: ``hessian(problem, pbar_N) @ x + problem.c`` without forming that matrix.
-    """
-    r = problem.H @ x + problem.c
-    m = problem.m
-    R_T = stick_slip(problem, pbar_N)
-    r[1:3 * m:3] += R_T * x[1:3 * m:3]
-    r[2:3 * m:3] += R_T * x[2:3 * m:3]
-    return r
-
-
-def stick_slip(problem: LeastAction, pbar_N: np.ndarray) -> np.ndarray:
-    """The friction rows' compliance (m,) that depends on pbar_N (compliant law; 0 for the rigid one).
-
-    Helper: :func:`cobra_ref.compliance.stick_slip_compliance` with this problem's v_s and G_TT
-    (the mean tangential diagonal of H).
-    """
-    return stick_slip_compliance(problem.stiction_velocity, problem.mu * pbar_N, _tangential_diagonal(problem.H, problem.m))
-
-
-def _tangential_diagonal(H: np.ndarray, m: int) -> np.ndarray:
-    """(m,) mean of each contact's two tangential diagonal entries of H."""
-    d = H.diagonal()
-    return 0.5 * (d[1:3 * m:3] + d[2:3 * m:3])
-
-
 def turn(v: np.ndarray, theta: np.ndarray, m: int) -> np.ndarray:
     """v' = Q^T v: each contact's tangential pair (v_t1, v_t2) in the frame turned by theta_i.
 
-    Helper: Q is block diagonal, a rotation by theta_i on contact i's tangent rows and the
+    Q is block diagonal, a rotation by theta_i on contact i's tangent rows and the
     identity elsewhere; ``turn(v', -theta, m)`` = Q v' turns back. v: a vector, or a matrix
     turned row by row.
     """
@@ -223,7 +170,7 @@ def turn(v: np.ndarray, theta: np.ndarray, m: int) -> np.ndarray:
 def turn_tangents(H: np.ndarray, theta: np.ndarray, m: int) -> np.ndarray:
     """Q^T H Q for the rotation Q of ``turn``: rows, then columns turned.
 
-    Helper: the Hessian of the least-action problem in the turned tangent frames.
+    The Hessian of the least-action problem in the turned tangent frames.
     """
     return turn(turn(H, theta, m).T, theta, m).T
 
@@ -231,7 +178,7 @@ def turn_tangents(H: np.ndarray, theta: np.ndarray, m: int) -> np.ndarray:
 def bounds(problem: LeastAction, pbar_N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(lo, hi) of one iterate: p_N >= 0, |p_t1'|, |p_t2'| <= mu pbar_N, the servo rows' bounds.
 
-    Helper: the box of the module docstring's aligned square.
+    The box of the module docstring's aligned square.
     """
     m, radius = problem.m, problem.mu * pbar_N
     lo, hi = np.zeros(len(problem.c)), np.full(len(problem.c), np.inf)
@@ -241,23 +188,10 @@ def bounds(problem: LeastAction, pbar_N: np.ndarray) -> tuple[np.ndarray, np.nda
     return lo, hi
 
 
-def coulomb_split(x: np.ndarray, r: np.ndarray, H: np.ndarray, m: int):
-    """(p_N (m,), p_T (m, 2), z (m, 2)): normal and friction impulses, and z = p_T - r_T / a.
-
-    Helper: z_i is where contact i's friction would go without its bound (module docstring);
-    a_i is the mean of its two tangential diagonal entries of H (the matrix H, or directly
-    those means, (m,)).
-    """
-    p = x[:3 * m].reshape(m, 3)
-    r_T = r[:3 * m].reshape(m, 3)[:, 1:]
-    a = H if H.ndim == 1 else _tangential_diagonal(H, m)
-    return p[:, 0], p[:, 1:], p[:, 1:] - r_T / a[:, None]
-
-
 def project_disk(v: np.ndarray, r: np.ndarray) -> np.ndarray:
     """Rows of v (k, 2) projected onto the disks of radii r (k,): v min(1, r / |v|).
 
-    Helper: Coulomb's friction set F_i of [COBRA] eq. (2) in the tangent plane.
+    Coulomb's friction set F_i of [COBRA] eq. (2) in the tangent plane.
     """
     norm = np.hypot(v[:, 0], v[:, 1])
     scale = np.where(norm > r, r / np.where(norm > 0, norm, 1.0), 1.0)
@@ -284,7 +218,7 @@ def impulse_floor(problem: LeastAction) -> float:
     """RELEASED max_i |c_N,i| / H_NN,i [N s]: a billionth of the largest impulse that would stop a
     contact's normal velocity at its own effective mass.
 
-    Helper: the floor of ``natural_residual``. Where every candidate contact hovers, the QPs' normal
+    The floor of ``natural_residual``. Where every candidate contact hovers, the QPs' normal
     impulses are rounding (1e-25 N s) and their residual relative to max p_N is rounding over
     rounding, of order one, however exact the answer (no impulse) is; measured against this floor
     such a step converges at its first iterate. Where contacts carry load, max p_N is far above it.
@@ -299,7 +233,7 @@ def impulse_floor(problem: LeastAction) -> float:
 def project_friction(x: np.ndarray, mu: np.ndarray) -> np.ndarray:
     """x with each contact's p_N clipped at 0 and p_T projected onto its circle ||p_T|| <= mu p_N.
 
-    Helper: the last operation on every step's impulses (module docstring). Normal impulses
+    The last operation on every step's impulses (module docstring). Normal impulses
     below ``RELEASED`` max p_N (a solver's rounding on a contact that carries nothing) are 0.
     """
     m = len(mu)
@@ -314,7 +248,7 @@ def guess(problem: LeastAction, x: np.ndarray, theta=None):
     """The next (pbar_N, theta) and where the next QP starts: Newton's guess on the active set of x,
     else the plain update from x.
 
-    Helper: the update of the friction fixed point (module docstring). ``theta``: the angles x
+    The update of the friction fixed point (module docstring). ``theta``: the angles x
     was solved with, kept for sticking contacts by the plain update.
     """
     m = problem.m
@@ -327,184 +261,6 @@ def guess(problem: LeastAction, x: np.ndarray, theta=None):
     theta = np.arctan2(p_T[:, 1], p_T[:, 0]) if theta is None else theta
     sliding = np.hypot(*z.T) > problem.mu * p_N
     return p_N, np.where(sliding, np.arctan2(z[:, 1], z[:, 0]), theta), x
-
-
-class ActiveSet(NamedTuple):
-    """Which way each row of an iterate is held (``active_set``)."""
-
-    released: np.ndarray  # (m,) contacts with p_N = 0
-    sliding: np.ndarray  # (m,) contacts whose friction is on its circle
-    at_lo: np.ndarray  # (n - 3m,) servo rows held at their lower bound
-    at_hi: np.ndarray  # (n - 3m,) servo rows held at their upper bound
-
-
-def active_set(problem: LeastAction, x: np.ndarray, r: np.ndarray, H: np.ndarray) -> ActiveSet:
-    """The active set of impulses x with residual r = H x + c (H, or its tangential means: ``coulomb_split``):
-    released, sliding, saturated rows.
-
-    Helper: released = p_N below RELEASED max p_N; sliding = |z_i| > mu p_N,i (the friction would
-    leave its circle without the bound); a servo row is held at a bound it sits on when its
-    residual pushes against that bound.
-    """
-    m = problem.m
-    p_N, _, z = coulomb_split(x, r, H, m)
-    released = p_N <= RELEASED * max(float(p_N.max(initial=0.0)), 1e-300)
-    sliding = ~released & (np.hypot(*z.T) > problem.mu * p_N)
-    x_s, r_s = x[3 * m:], r[3 * m:]
-    tol = 1e-9 * max(float(np.abs(problem.hi).max(initial=0.0)), 1e-300)
-    return ActiveSet(released, sliding, (x_s <= problem.lo + tol) & (r_s >= 0), (x_s >= problem.hi - tol) & (r_s <= 0))
-
-
-def coulomb_newton(problem: LeastAction, x: np.ndarray, rounds: int = 4, steps: int = 4):
-    """(pbar_N, theta, X) solving Coulomb's law exactly near x by Newton's method, or None.
-
-    Implements: the friction fixed point of [COBRA] eq. (6) on an active set. With the friction
-    angle theta_i of each sliding contact as an extra unknown, the conditions are a square
-    system in (x, theta_S)::
-
-        r_j = 0                              every free row j (r = (G + R(x)) x + c)
-        x_j = 0 (released contact), x_j = bound (saturated servo row)
-        p_T,i = mu_i p_N,i e(theta_i),  e_perp(theta_i) . r_T,i = 0      every sliding contact i
-
-    (friction on its circle, pointing against the slip), with R(x) the stick-slip compliance of
-    the compliant law, which depends on p_N. The active set starts as x's (``active_set``); after
-    at most ``steps`` Newton iterations, rows whose solution breaks their set's inequalities
-    change set (``_corrected``: a sticking contact outside its circle slides, a sliding one whose
-    slip turns sticks, a contact pulling is released, a released one that closes is engaged, a
-    servo row beyond its bound saturates, a saturated one pulled back is freed), for up to
-    ``rounds`` rounds. None if the linear system is singular, the result not finite, or the set
-    still changes.
-    """
-    m = problem.m
-    H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
-    r = H @ x + problem.c
-    act = active_set(problem, x, r, H)
-    # the sliding contacts' angles start at their friction's direction (against the slip if it has none yet)
-    p_T, r_T = x[:3 * m].reshape(m, 3)[:, 1:], r[:3 * m].reshape(m, 3)[:, 1:]
-    start = np.where((np.hypot(*p_T.T) > 0)[:, None], p_T, -r_T)
-    theta0 = np.arctan2(start[:, 1], start[:, 0])
-    for _ in range(rounds):
-        system = _NewtonSystem(problem, act)
-        X, theta = x.copy(), theta0.copy()
-        for _ in range(steps):
-            K, F, r = system.at(X, theta)
-            _, _, d, info = _gesv(K, -F)  # LAPACK's LU solve
-            if info != 0 or not np.isfinite(d).all():
-                return None
-            X, theta[system.S] = X + d[:len(X)], theta[system.S] + d[len(X):]
-            # Newton's method converges quadratically: after a step of relative size s the error is
-            # of the order s^2, so a step below sqrt(NEWTON_TOL) ends it
-            if np.abs(d).max() <= _SQRT_NEWTON_TOL * np.abs(X).max():
-                break
-        corrected = _corrected(problem, X, theta, act, system.residual(X))
-        if all(np.array_equal(a, b) for a, b in zip(corrected, act)):
-            p_N, p_T = np.maximum(X[0:3 * m:3], 0.0), X[:3 * m].reshape(m, 3)[:, 1:]
-            return p_N, np.where(act.sliding, theta, np.arctan2(p_T[:, 1], p_T[:, 0])), X
-        act = corrected
-    return None
-
-
-class _NewtonSystem:
-    """Jacobian K and residual F of ``coulomb_newton``'s system for one active set, at (X, theta_S).
-
-    The unknowns are X (n,) then theta_S; the rows are r's, replaced by the circle's conditions on
-    the tangent rows of the sliding contacts, then one row per sliding contact (index D).
-    """
-
-    def __init__(self, problem: LeastAction, act: ActiveSet):
-        m, n = problem.m, len(problem.c)
-        S = np.flatnonzero(act.sliding)
-        k = len(S)
-        size = n + k
-        self.problem, self.m, self.n, self.S = problem, m, n, S
-        N = 3 * S
-        self.N, self.T1, self.T2, self.D = N, N + 1, N + 2, np.arange(n, size)
-        self.T = np.concatenate([self.T1, self.T2])
-        pinned = np.zeros(n, dtype=bool)
-        pinned[:3 * m] = np.repeat(act.released, 3)
-        pinned[3 * m:] = act.at_lo | act.at_hi
-        self.pinned = np.flatnonzero(pinned)
-        target = np.zeros(n)
-        target[3 * m:] = np.where(act.at_lo, problem.lo, problem.hi)
-        self.target = target[self.pinned]
-        self.G_TT = _tangential_diagonal(problem.H, m)
-        self.R_max = STICK_SLIP_MAX * self.G_TT
-        # positions in K.flat of every contact's tangential diagonal entries (3i+1, 3i+1), (3i+2, 3i+2),
-        # of their derivatives by p_N, (3i+1, 3i), (3i+2, 3i), and of the pinned rows' diagonal
-        tangent, normal = _tangent_rows(m)
-        self.tangent, self.diag_T, self.dT_dN = tangent, tangent * (size + 1), tangent * size + normal
-        self.diag_pinned = self.pinned * (size + 1)
-        # positions in K.flat of the circle's entries, in the order ``at`` lists their values:
-        # (T1, T1), (T2, T2), (T1, N), (T2, N), (T1, D), (T2, D), (D, D)
-        T1, T2, D = self.T1 * size, self.T2 * size, self.D * size
-        self.circle = np.concatenate([T1 + self.T1, T2 + self.T2, T1 + N, T2 + N, T1 + self.D, T2 + self.D,
-                                      D + self.D])
-        self.ones = np.ones(2 * k)
-        self.K = np.zeros((size, size))
-        self.K_flat = self.K.reshape(-1)  # a view
-        self.F = np.zeros(size)
-
-    def residual(self, X) -> np.ndarray:
-        """r = (G + R(X)) X + c at X."""
-        return residual(self.problem, X, np.maximum(X[0:3 * self.m:3], 0.0))
-
-    def at(self, X, theta):
-        """(K, F, r) at (X, theta) (``coulomb_newton``'s system)."""
-        problem, m, n, K, K_flat, F = self.problem, self.m, self.n, self.K, self.K_flat, self.F
-        N, T1, T2, D = self.N, self.T1, self.T2, self.D
-        p_N = np.maximum(X[0:3 * m:3], 0.0)
-        R_T = stick_slip_compliance(problem.stiction_velocity, problem.mu * p_N, self.G_TT)
-        K[:n, :n], K[:n, n:] = problem.H, 0.0
-        K_flat[self.diag_T] += np.concatenate([R_T, R_T])
-        r = K[:n, :n] @ X + problem.c
-        F[:n] = r
-        # the stick-slip compliance R_T = v_s / (mu p_N) where it is not capped: d r_T / d p_N = -R_T p_T / p_N
-        uncapped = (R_T < self.R_max) & (p_N > 0)
-        dR = np.where(uncapped, R_T / np.where(uncapped, p_N, 1.0), 0.0)
-        K_flat[self.dT_dN] -= np.concatenate([dR, dR]) * X[self.tangent]
-        # sliding contact i (row D): p_T = mu p_N e(theta) and e_perp . r_T = 0, d e_perp / d theta = -e
-        mu, c, sn = problem.mu[self.S], np.cos(theta[self.S]), np.sin(theta[self.S])
-        K[D, :n] = c[:, None] * K[T2, :n] - sn[:, None] * K[T1, :n]
-        K[D, n:] = 0.0
-        r_T1, r_T2, mu_p_N = r[T1], r[T2], mu * X[N]
-        F[D] = c * r_T2 - sn * r_T1
-        # its tangent rows: the circle's conditions, in place of the law's rows
-        K[self.T] = 0.0
-        K_flat[self.circle] = np.concatenate([self.ones, -mu * c, -mu * sn, mu_p_N * sn, -mu_p_N * c,
-                                              -(c * r_T1 + sn * r_T2)])
-        F[T1], F[T2] = X[T1] - mu_p_N * c, X[T2] - mu_p_N * sn
-        # released contacts and saturated servo rows are pinned at their targets
-        K[self.pinned] = 0.0
-        K_flat[self.diag_pinned] = 1.0
-        F[self.pinned] = X[self.pinned] - self.target
-        return K, F, r
-
-
-def _tangent_rows(m: int) -> tuple[np.ndarray, np.ndarray]:
-    """(tangent, normal): the rows 3i+1 then 3i+2 of the m contacts, and each one's normal row 3i."""
-    i = np.arange(m)
-    return np.concatenate([3 * i + 1, 3 * i + 2]), np.concatenate([3 * i, 3 * i])
-
-
-def _corrected(problem: LeastAction, X, theta, act: ActiveSet, r) -> ActiveSet:
-    """The active set after the changes that the Newton solution (X, theta) of ``act`` asks for (r: its residual)."""
-    m = problem.m
-    p = X[:3 * m].reshape(m, 3)
-    r3 = r[:3 * m].reshape(m, 3)
-    tol = 1e-9 * np.abs(p[:, 0]).max(initial=0.0)  # impulses
-    tol_r = 1e-9 * np.abs(r3).max(initial=0.0)  # the laws' residuals (velocities)
-    outside = np.hypot(p[:, 1], p[:, 2]) > problem.mu * p[:, 0] + tol
-    turned = np.cos(theta) * r3[:, 1] + np.sin(theta) * r3[:, 2] > tol_r  # the slip runs along the friction: it should stick
-    engaged = act.released & (r3[:, 0] < -tol_r)  # a released contact that would close: it is engaged, sliding
-    released = (act.released & ~engaged) | (~act.released & (p[:, 0] < -tol))
-    sliding = ~released & ((act.sliding & ~turned) | (~act.sliding & outside) | engaged)
-    x_s, r_s, lo, hi = X[3 * m:], r[3 * m:], problem.lo, problem.hi
-    tol_s = 1e-9 * np.abs(hi).max(initial=0.0)
-    tol_rs = 1e-9 * np.abs(r_s).max(initial=0.0)
-    free = ~act.at_lo & ~act.at_hi
-    at_lo = (act.at_lo & (r_s >= -tol_rs)) | (free & (x_s < lo - tol_s))
-    at_hi = (act.at_hi & (r_s <= tol_rs)) | (free & (x_s > hi + tol_s))
-    return ActiveSet(released, sliding, at_lo, at_hi)
 
 
 def kkt_residuals(problem: LeastAction, x: np.ndarray) -> dict:

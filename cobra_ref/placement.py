@@ -19,7 +19,7 @@ result is looked at:
   (c_s: sphere centre, r_s: its radius; the placed and the settled start are included);
 * the box's near face then goes ``gap`` (5 cm, A9) beyond that reach: the placement's clearance
   is ``box_gap = e + gap - r``, r the middle link's radius (``placed_state`` puts the face at
-  r + box_gap from m). The box is outside the band the wave sweeps, and the robot's leading side
+  r + box_gap from m; ``TravelPlacement.box`` is that ``BoxPlacement``). The box is outside the band the wave sweeps, and the robot's leading side
   meets it after travelling about ``gap``, as a rolling gait's body meets its box.
 """
 
@@ -29,10 +29,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .infra.validation import DEFAULT_DT
 from .kinematics import forward_kinematics
 from .model import Model
 from .simulate import simulate
-from .start import initial_state, placed_state
+from .start import BoxPlacement, initial_state, placed_state
 from .step import SimulationError, StepSettings
 
 DIRECTION_PERIODS = 2.0  # periods of the box-free run whose centre-of-mass displacement gives d
@@ -47,6 +48,11 @@ class TravelPlacement:
     direction: tuple
     reach: float
     box_gap: float
+
+    @property
+    def box(self) -> BoxPlacement:
+        """The ``start.BoxPlacement`` of this placement: direction d, clearance box_gap."""
+        return BoxPlacement(gap=self.box_gap, direction=self.direction)
 
 
 def _robot(model: Model) -> list[int]:
@@ -79,7 +85,7 @@ def _reach(model: Model, q, d: np.ndarray) -> float:
                for b, s, r in zip(sph.body, sph.center, sph.radius) if b in robot)
 
 
-def travel_placement(model: Model, reference, dt: float = 1e-3, gap: float = 0.05,
+def travel_placement(model: Model, reference, dt: float = DEFAULT_DT, gap: float = 0.05,
                      settings: StepSettings | None = None) -> TravelPlacement:
     """The box placement of a travelling gait: d, e and box_gap of the module docstring.
 

@@ -1,9 +1,11 @@
 """simulate(): roll a stepper forward from a start at rest, and record every step and contact.
 
 Implements: the paper's "time-stepping methodology ... over Delta t" ([COBRA] sec. "Motion
-Optimization") with :func:`cobra_ref.step.step` or its faster twin
+Optimization") with a stepper named in :mod:`cobra_ref.steppers`: the reference step
+:func:`cobra_ref.step.step` (``stepper="reference"``) or its faster twin
 :class:`cobra_ref.fast.stepper.FastStepper` (``stepper="fast"``, the default; the two take the
-same steps, tests run them side by side). What is recorded: :mod:`cobra_ref.trajectory`.
+same steps, tests run them side by side), from the settle of the start to the last step. What is
+recorded: :mod:`cobra_ref.trajectory`.
 """
 
 from __future__ import annotations
@@ -16,25 +18,27 @@ import numpy as np
 
 from .contact import KINDS, find_contacts
 from .infra.executors import one_blas_thread
-from .fast.stepper import FastStepper
 from .model import Model
 from .qp import ContactSolveError
 from .start import initial_state
-from .step import SimulationError, StepSettings, joint_coordinates, step
+from .step import SimulationError, StepSettings, joint_coordinates
+from .steppers import STEPPERS, make_stepper
 from .trajectory import CONTACT_KEYS, STEP_KEYS, Trajectory
-from .infra.validation import ValidationError, time_grid
+from .infra.validation import ValidationError, step_count
 
-STEPPERS = ("fast", "reference")
 IMPACT_SPEED = 0.01  # [m/s] a contact that starts carrying load while approaching faster is an impact (A26)
 MAX_START_PENETRATION = 0.005  # [m] a start deeper in the ground or the box is refused
 
 
 def simulate(model: Model, reference, duration: float, settings: StepSettings = StepSettings(), q0=None,
-             qd0=None, progress=None, box_offset=None, box_direction=None, stepper: str = "fast") -> Trajectory:
-    """Simulate ``duration`` seconds from (q0, qd0) (default: ``start.initial_state``); return a Trajectory.
+             qd0=None, progress=None, stepper: str = "fast") -> Trajectory:
+    """Simulate ``duration`` seconds from (q0, qd0); return a Trajectory.
 
-    Implements: the time stepping of [COBRA] (module docstring). The time grid is checked before
-    anything is allocated (``validation.time_grid``): ``settings.dt`` within the stable range,
+    Implements: the time stepping of [COBRA] (module docstring). ``stepper``: the name of the
+    stepper (``steppers.STEPPERS``); a new one is made for the run, and, without q0, for the start
+    ``start.initial_state(model, reference, settings, stepper=stepper)`` (the default box
+    placement; for another, pass that function's (q0, qd0) with its ``BoxPlacement``). The time
+    grid is checked before anything is allocated (``validation.time_grid``): ``settings.dt`` within the stable range,
     ``round(duration / dt)`` steps, at least one and at most ``validation.MAX_STEPS`` (the
     command line also asks for a whole number of steps). Raises ``SimulationError`` for a bad
     duration or stepper, a start in deep penetration, or a failure mid-run; a failure mid-run,
@@ -43,16 +47,16 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
     (``KeyboardInterrupt``) is re-raised as it is, with the same ``trajectory`` attribute.
     """
     try:
-        n_steps = time_grid(duration, settings.dt, exact=False)
+        n_steps = step_count(duration, settings.dt, exact=False)  # settings.dt: checked by StepSettings
     except ValidationError as exc:
         raise SimulationError(str(exc)) from None
     if stepper not in STEPPERS:
         raise SimulationError(f"stepper must be one of {', '.join(STEPPERS)}, got {stepper!r}")
     if q0 is None:
-        q0, qd0 = initial_state(model, reference, settings, box_offset, box_direction=box_direction)
+        q0, qd0 = initial_state(model, reference, settings, stepper=stepper)
     q, qd = model.check_q(q0).copy(), model.check_qd(np.zeros(model.nv) if qd0 is None else qd0).copy()
     check_start(model, q)
-    advance = _stepper(model, settings, stepper)
+    stepping = make_stepper(stepper, model, settings)
     log = _Log(model, n_steps, settings.dt)
     log.add_state(0.0, q, qd)
     # the step's matrices are small: one BLAS thread is fastest (executors.one_blas_thread)
@@ -61,7 +65,7 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
         for k in range(n_steps):
             t = k * settings.dt
             try:
-                res = advance(q, qd, t, reference)
+                res = stepping.step(q, qd, t, reference)
                 q, qd = res.q, res.qd
                 if not math.isfinite(q.sum() + qd.sum()):  # a NaN or inf anywhere makes the sum non-finite
                     raise _NonFinite(f"non-finite state at step {k}, t = {t:.4f} s")
@@ -71,18 +75,18 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
                     progress(k + 1, n_steps)
             except _NonFinite as exc:
                 traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): non-finite state",
-                                  meta(model, settings, advance))
+                                  meta(model, settings, stepping))
                 raise SimulationError(str(exc), traj) from None
             except KeyboardInterrupt as exc:
                 exc.trajectory = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): interrupted",
-                                            meta(model, settings, advance))
+                                            meta(model, settings, stepping))
                 raise
             except Exception as exc:  # any failure of the step: keep what was computed, name step and time
                 what = str(exc) if isinstance(exc, EXPECTED) else f"{type(exc).__name__}: {exc}"
                 traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): {what}",
-                                  meta(model, settings, advance))
+                                  meta(model, settings, stepping))
                 raise SimulationError(f"step failed at step {k}, t = {t:.4f} s: {what}", traj) from exc
-    return log.finish(time.perf_counter() - start, "", meta(model, settings, advance))
+    return log.finish(time.perf_counter() - start, "", meta(model, settings, stepping))
 
 
 # the failures a step is known to raise (named by their message alone); any other is named with its type
@@ -93,38 +97,18 @@ class _NonFinite(Exception):
     """A step that left NaN or inf in the state."""
 
 
-def _stepper(model: Model, settings: StepSettings, name: str):
-    """A function (q, qd, t, reference) -> StepResult: the fast stepper, or the reference step with
-    its warm start carried from step to step."""
-    if name == "fast":
-        return FastStepper(model, settings).step
-    memory = {"previous": None}
-
-    def reference_step(q, qd, t, reference):
-        result = step(model, q, qd, t, reference, settings, memory["previous"])
-        memory["previous"] = result.memory
-        return result
-
-    reference_step.timing = {}
-    return reference_step
-
-
-def meta(model: Model, settings: StepSettings, advance) -> dict:
-    """What a run was made with (settings, friction, model) and the seconds spent per phase.
-
-    Helper: stored in the trajectory's ``meta``.
-    """
-    owner = getattr(advance, "__self__", advance)
+def meta(model: Model, settings: StepSettings, stepper) -> dict:
+    """What a run was made with (settings, friction, model, stepper) and the seconds spent per
+    phase of the stepper (``stepper.timing``), stored in the trajectory's ``meta``."""
     return {"settings": asdict(settings), "model": model.name, "nq": model.nq, "nv": model.nv,
             "mu": model.mu, "mu_robot_box": model.mu_rb, "mu_box_ground": model.mu_bg,
-            "stepper": "fast" if hasattr(owner, "chain") else "reference",
-            "phase_seconds": dict(getattr(owner, "timing", {}))}
+            "stepper": stepper.name, "phase_seconds": dict(stepper.timing)}
 
 
 def check_start(model: Model, q) -> None:
     """Refuse a start deeper than MAX_START_PENETRATION in the ground or the box, naming the body.
 
-    Helper: ``simulate`` checks its start with it; the command line checks a placement before
+    ``simulate`` checks its start with it; the command line checks a placement before
     it settles.
     """
     contacts = find_contacts(model, q, 0.0)

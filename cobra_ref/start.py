@@ -20,13 +20,17 @@ sinks by the contacts' sag, within about ``SETTLE_TIME``.)
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
+from .infra.executors import one_blas_thread
 from .kinematics import forward_kinematics
 from .model import Model
 from .quaternion import quat_exp, quat_mul
 from .robots import neutral_q
 from .step import StepSettings
+from .steppers import STEPPERS, make_stepper
 
 SETTLE_TIME = 0.05  # [s] the scene settles at least this long with the joints holding the start shape (A25)
 SETTLE_MAX = 3.0  # [s] and at most this long
@@ -34,42 +38,100 @@ SETTLE_SPEED = 1e-2  # [m/s, rad/s] until no coordinate moves faster (below the 
 SETTLE_STILL = 0.05  # [s] ... for this long in a row
 
 
-def initial_state(model: Model, reference, settings: StepSettings = StepSettings(), box_offset=None,
-                  box_gap: float = 0.05, box_direction=None, settle: bool = True, box_yaw=None, box_shift=None,
-                  box_turn: float = 0.0):
-    """(q0, qd0): the scene placed (``placed_state``) and, with ``settle``, settled (module docstring).
+def _pair(value, name: str):
+    """value as two finite floats (dx, dy), else a ValueError naming ``name``."""
+    pair = np.asarray(value, dtype=float).reshape(-1)
+    if pair.shape != (2,) or not np.all(np.isfinite(pair)):
+        raise ValueError(f"{name} must be two finite numbers (dx, dy) in metres, got {value}")
+    return tuple(float(v) for v in pair)
+
+
+def _angle(value, name: str) -> float:
+    """value as a finite float, else a ValueError naming ``name``."""
+    angle = float(value)
+    if not np.isfinite(angle):
+        raise ValueError(f"{name} must be a finite angle in radians, got {value}")
+    return angle
+
+
+@dataclass(frozen=True)
+class BoxPlacement:
+    """Where ``placed_state`` puts the box (its docstring states the rule); checked once, here.
+
+    ``offset`` (dx, dy) [m]: the box centre at the middle + offset, axis-aligned (None: the rule's
+    side); ``gap`` [m]: the clearance between the box's near face and the middle link (A9; not
+    used with ``offset``); ``direction`` (dx, dy): the side the box goes to (None: the concave
+    side); ``yaw`` [rad]: the box's heading (None: the placement's own); ``shift`` (dx, dy) [m] and
+    ``turn`` [rad]: added to the placed centre and yaw (an ensemble member's perturbation). Bad
+    values raise ValueError naming the field (as box_<field>) and the value.
+    """
+
+    offset: tuple | None = None
+    gap: float = 0.05
+    direction: tuple | None = None
+    yaw: float | None = None
+    shift: tuple | None = None
+    turn: float = 0.0
+
+    def __post_init__(self):
+        def put(field, value):
+            object.__setattr__(self, field, value)
+
+        if self.offset is not None:
+            put("offset", _pair(self.offset, "box_offset"))
+        if not np.isfinite(float(self.gap)):
+            raise ValueError(f"box_gap must be a finite clearance in metres, got {self.gap}")
+        put("gap", float(self.gap))
+        if self.direction is not None:
+            d = np.asarray(self.direction, dtype=float).reshape(-1)[:2]
+            if not (d.shape == (2,) and np.all(np.isfinite(d)) and np.linalg.norm(d) > 0):
+                raise ValueError(f"box_direction must be a finite non-zero (dx, dy), got {self.direction}")
+            put("direction", tuple(float(v) for v in d))
+        if self.yaw is not None:
+            put("yaw", _angle(self.yaw, "box_yaw"))
+        if self.shift is not None:
+            put("shift", _pair(self.shift, "box_shift"))
+        put("turn", _angle(self.turn, "box_turn"))
+
+
+def initial_state(model: Model, reference, settings: StepSettings = StepSettings(),
+                  placement: BoxPlacement = BoxPlacement(), settle: bool = True, stepper: str = "fast"):
+    """(q0, qd0): the scene placed (``placed_state`` with ``placement``) and, with ``settle``,
+    settled (module docstring) by a new stepper of kind ``stepper`` (``steppers.STEPPERS``).
 
     Implements: the start at rest (assumption A25): the joints hold the reference's t = 0
     shape while the robot and the box come to rest on the ground under ``settings``' contact
     law and servo; what is left of their motion (below SETTLE_SPEED) is returned as qd0.
-    ``box_offset``, ``box_gap``, ``box_direction``, ``box_yaw``, ``box_shift`` and ``box_turn``:
-    see ``placed_state``.
     """
-    q = placed_state(model, reference, box_offset, box_gap, box_direction=box_direction, box_yaw=box_yaw,
-                     box_shift=box_shift, box_turn=box_turn)
+    if stepper not in STEPPERS:
+        raise ValueError(f"stepper must be one of {', '.join(STEPPERS)}, got {stepper!r}")
+    q = placed_state(model, reference, placement)
     qd = np.zeros(model.nv)
     if settle:
-        from .infra.executors import one_blas_thread
-        from .fast.stepper import FastStepper
-
-        hold = _Hold(reference(0.0)[0])
-        stepper = FastStepper(model, settings)
-        least, most = int(round(SETTLE_TIME / settings.dt)), int(round(SETTLE_MAX / settings.dt))
-        still, calm = int(round(SETTLE_STILL / settings.dt)), 0  # steps in a row below SETTLE_SPEED
-        peak = 0.0  # the kinetic energy at the start of the last step
         with one_blas_thread():  # as simulate steps: the same start in a script as on the command line
-            for k in range(most):
-                result = stepper.step(q, qd, k * settings.dt, hold)
-                q, qd = result.q, result.qd
-                # kinetic damping: the energy has passed a peak, so stop every coordinate (and start
-                # the next step afresh: no velocity memory, as on a first step)
-                if result.kinetic < peak:
-                    qd, stepper.memory, peak = np.zeros_like(qd), None, 0.0
-                else:
-                    peak = result.kinetic
-                calm = calm + 1 if np.abs(qd).max() < SETTLE_SPEED else 0
-                if k + 1 >= least and calm >= still:
-                    break
+            q, qd = _settle(make_stepper(stepper, model, settings), q, qd, _Hold(reference(0.0)[0]))
+    return q, qd
+
+
+def _settle(stepper, q, qd, hold):
+    """(q, qd) after the dynamic relaxation of the module docstring, stepped by ``stepper`` with
+    the joints holding ``hold``."""
+    dt = stepper.settings.dt
+    least, most = int(round(SETTLE_TIME / dt)), int(round(SETTLE_MAX / dt))
+    still, calm = int(round(SETTLE_STILL / dt)), 0  # steps in a row below SETTLE_SPEED
+    peak = 0.0  # the kinetic energy at the start of the last step
+    for k in range(most):
+        result = stepper.step(q, qd, k * dt, hold)
+        q, qd = result.q, result.qd
+        # kinetic damping: the energy has passed a peak, so stop every coordinate (and start
+        # the next step afresh: no velocity memory, as on a first step)
+        if result.kinetic < peak:
+            qd, stepper.memory, peak = np.zeros_like(qd), None, 0.0
+        else:
+            peak = result.kinetic
+        calm = calm + 1 if np.abs(qd).max() < SETTLE_SPEED else 0
+        if k + 1 >= least and calm >= still:
+            break
     return q, qd
 
 
@@ -84,21 +146,21 @@ class _Hold:
         return self.q0, zero, zero
 
 
-def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05, clearance: float = 0.0,
-                 box_direction=None, box_yaw=None, box_shift=None, box_turn: float = 0.0) -> np.ndarray:
+def placed_state(model: Model, reference, placement: BoxPlacement = BoxPlacement(),
+                 clearance: float = 0.0) -> np.ndarray:
     """q of the robot in the reference's t = 0 shape, head at the origin facing +x, lowest sphere
-    ``clearance`` above the ground (default: touching it); the box flat on the ground beside the middle of the snake
-    (assumption A9). ``initial_state`` lets this settle.
+    ``clearance`` above the ground (default: touching it); the box flat on the ground beside the
+    middle of the snake (assumption A9), where ``placement`` says. ``initial_state`` lets this settle.
 
     Box placement. The middle of the snake is the midpoint m of the two middle bodies' centres of
     mass (L5 and L6 for COBRA); its heading h is the horizontal direction from the second to the
     first, and its left side n is h turned by +90 degrees about the vertical. The box goes in the
-    horizontal direction d from m, its centre at m + (r + a/2 + box_gap) d (r: the middle link's
-    radius, a: the box's edge), turned so that one face looks back at the robot: ``box_gap``
+    horizontal direction d from m, its centre at m + (r + a/2 + gap) d (r: the middle link's
+    radius, a: the box's edge), turned so that one face looks back at the robot: ``placement.gap``
     (default 0.05 m, A9) is then the clearance between that face and the middle link's cylinder.
     The direction d is, in this order:
 
-    * ``box_direction`` = (dx, dy) if given (sidewinding pushes with its leading side:
+    * ``placement.direction`` = (dx, dy) if given (sidewinding pushes with its leading side:
       ``reproduce`` passes the direction the gait travels);
     * the concave side: from m to the robot's centre of mass c, when the start is bent, that is
       when c lies at least ``STRAIGHT_TOLERANCE`` (1 mm) to the side of the middle's axis
@@ -108,18 +170,16 @@ def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05
       centre of mass is on the left or on the axis, -n if it is on the right by 1 mm or more. A
       straight start's box then sits beside the middle link on the body's left, clear of it.
 
-    ``box_offset`` = (dx, dy) [m] instead puts the box centre at m + (dx, dy) (world axes),
-    axis-aligned; ``box_yaw`` [rad] turns the box about the vertical to that heading (world
-    axes; by default the placement's own: facing the robot, or 0 with ``box_offset``).
+    ``placement.offset`` = (dx, dy) [m] instead puts the box centre at m + (dx, dy) (world axes),
+    axis-aligned; ``placement.yaw`` [rad] turns the box about the vertical to that heading (world
+    axes; by default the placement's own: facing the robot, or 0 with an offset).
 
-    After the placement, ``box_shift`` = (dx, dy) [m] (world axes) is added to the box's centre
-    and ``box_turn`` [rad] to its yaw (an ensemble member's perturbation,
+    After the placement, ``placement.shift`` = (dx, dy) [m] (world axes) is added to the box's
+    centre and ``placement.turn`` [rad] to its yaw (an ensemble member's perturbation,
     ``reproduce.ensemble``); None and 0 leave the placement as it is.
 
     The robot's base is first turned so that its start shape lies on its flattest side
     (``_rest_on_flattest_side``; no turn for the planar rolling shapes).
-
-    Helper: the placement half of ``initial_state``.
     """
     q = neutral_q(model)
     act_q = [model.q_idx[i].start for i, jt in enumerate(model.joint_type) if jt != "free"]
@@ -136,33 +196,20 @@ def placed_state(model: Model, reference, box_offset=None, box_gap: float = 0.05
         mid_bodies = robot[len(robot) // 2 - 1:len(robot) // 2 + 1]
         middle = com[mid_bodies].mean(axis=0)
         iq = model.q_idx[box.body]
-        if box_offset is not None:
-            offset = np.asarray(box_offset, dtype=float).reshape(-1)
-            if offset.shape != (2,) or not np.all(np.isfinite(offset)):
-                raise ValueError(f"box_offset must be two finite numbers (dx, dy) in metres, got {box_offset}")
-            centre, yaw = middle[:2] + offset, 0.0
+        p = placement
+        if p.offset is not None:
+            centre, yaw = middle[:2] + np.asarray(p.offset, dtype=float), 0.0
         else:
-            if box_direction is not None:
-                d = np.asarray(box_direction, dtype=float)[:2]
-                if not (np.all(np.isfinite(d)) and np.linalg.norm(d) > 0):
-                    raise ValueError(f"box_direction must be a finite non-zero (dx, dy), got {box_direction}")
-            else:
-                d = _concave_side(com, mid_bodies, [model.mass[i] for i in robot])
+            d = np.asarray(p.direction, dtype=float) if p.direction is not None else \
+                _concave_side(com, mid_bodies, [model.mass[i] for i in robot])
             d = d / np.linalg.norm(d)
             r = max(sph.radius[np.isin(sph.body, mid_bodies)])
-            centre, yaw = middle[:2] + (r + box.half[0] + box_gap) * d, np.arctan2(d[1], d[0])
-        if box_yaw is not None:
-            yaw = float(box_yaw)
-            if not np.isfinite(yaw):
-                raise ValueError(f"box_yaw must be a finite angle in radians, got {box_yaw}")
-        if box_shift is not None:
-            shift = np.asarray(box_shift, dtype=float).reshape(-1)
-            if shift.shape != (2,) or not np.all(np.isfinite(shift)):
-                raise ValueError(f"box_shift must be two finite numbers (dx, dy) in metres, got {box_shift}")
-            centre = centre + shift
-        if not np.isfinite(float(box_turn)):
-            raise ValueError(f"box_turn must be a finite angle in radians, got {box_turn}")
-        yaw = yaw + float(box_turn)
+            centre, yaw = middle[:2] + (r + box.half[0] + p.gap) * d, np.arctan2(d[1], d[0])
+        if p.yaw is not None:
+            yaw = p.yaw
+        if p.shift is not None:
+            centre = centre + np.asarray(p.shift, dtype=float)
+        yaw = yaw + p.turn
         q[iq.start:iq.start + 3] = [centre[0], centre[1], box.half[2]]
         q[iq.start + 3:iq.start + 7] = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
     return q
@@ -189,7 +236,7 @@ def _rest_on_flattest_side(model: Model, q) -> np.ndarray:
     """Base quaternion that turns the robot's best-fit plane horizontal (a 3-D start shape, such as
     sidewinding's, then lies on its flattest side instead of standing on its tips and falling).
 
-    Helper: the plane through the robot bodies' centres of mass with the least variance across
+    The plane through the robot bodies' centres of mass with the least variance across
     it (its normal n is the last right singular vector of the centred points); the base turns by
     the smallest rotation taking n (chosen with n_z >= 0) to z. A planar shape (every rolling
     gait at t = 0) has n = z already, so it is left as it is.

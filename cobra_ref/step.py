@@ -10,22 +10,23 @@ Implements: [COBRA] eq. (1)-(6) over one step dt, at the velocity level (semi-im
 1. eq. (1): M = crba(q) and h = C(q, w) w + g(q) = rnea(q, w, 0) (:mod:`cobra_ref.dynamics`), the
    velocity-product terms at the step's midpoint velocity w, extrapolated from the last step
    (``midpoint_velocity``);
-2. the joints (``StepSettings.servo``): ``"position"``, the paper's position-controlled joints:
-   every coordinate is free and each joint gets a servo row towards the reference at the step's
-   start, its impulse bounded by tau_max dt (:func:`cobra_ref.compliance.servo_rows`); or
-   ``"prescribed"`` (Simscape's
-   "motion provided"): each joint's qd+ is the secant to the reference, (q_ref(t + dt) - q) / dt,
-   and only the base and the box are free (F); the torques are recovered from eq. (1);
+2. the joints (``StepSettings.joint_servo``, :mod:`cobra_ref.compliance`): the position servo,
+   the paper's position-controlled joints: every coordinate is free and each joint gets a servo
+   row towards the reference at the step's start, its impulse bounded by tau_max dt; or the
+   prescribed joints (Simscape's "motion provided"): each joint's qd+ is the secant to the
+   reference, (q_ref(t + dt) - q) / dt, and only the base and the box are free (F); the torques
+   are recovered from eq. (1);
 3. eq. (1) without impulses: qd_free over the free coordinates;
 4. eq. (2)-(4): the contacts and their Jacobian J_c (:mod:`cobra_ref.contact`);
 5. eq. (5): the rows J = [J_c; J_servo] over F, the Delassus matrix G and c, with each row's
-   compliance and offset from its law (``StepSettings.contact``: ``"compliant"`` or ``"rigid"``);
+   compliance and offset from its law (``StepSettings.law``: compliant or rigid);
 6. eq. (6): the impulses x, Coulomb's friction by a fixed point of OSQP solves
    (:mod:`cobra_ref.least_action`), started from the previous step's impulses;
-7. qd+ = qd_free + M_FF^-1 J^T x, the joint torques, and q+.
+7. qd+ = qd_free + M_FF^-1 J^T x, the joint torques, and q+ (``step_result``).
 
 The faster path :class:`cobra_ref.fast.stepper.FastStepper` takes the same step with batched
-dynamics and contacts and certified QP solves; tests run both side by side.
+dynamics and contacts and certified QP solves, and builds its result with the same
+``step_result``; tests run both side by side (:mod:`cobra_ref.steppers` names them).
 """
 
 from __future__ import annotations
@@ -35,15 +36,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import compliance
-from .compliance import LAWS
+from .compliance import CONTACT_LAWS, JOINT_SERVOS, LAWS, SERVOS
 from .contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND, Contacts, contact_jacobian, find_contacts
 from .dynamics import bias_force, crba, potential_energy
+from .infra.validation import DEFAULT_DT, RULES, check_choice
 from .kinematics import forward_kinematics, integrate
 from .least_action import LeastAction, LeastActionInfo, delassus, kkt_residuals, solve_least_action
-from .model import Model
-
-SERVOS = ("position", "prescribed")
+from .model import JOINT_NV, Model
 
 
 class SimulationError(RuntimeError):
@@ -58,13 +57,14 @@ class SimulationError(RuntimeError):
 class StepSettings:
     """How a step is taken: time step, contact law, joint servo, contact search margin.
 
-    ``dt`` [s] (assumption A14); ``contact``: ``"compliant"`` (the paper's high-fidelity
-    spring-damper contact, A12-A13) or ``"rigid"`` (eq. (2)-(6) as written, A15); ``servo``:
-    ``"position"`` (the paper's position-controlled joints, A7) or ``"prescribed"``; ``margin``
-    [m]: candidate contacts are those with a gap below it.
+    ``dt`` [s] (assumption A14; default ``DEFAULT_DT``); ``contact``: ``"compliant"`` (the
+    paper's high-fidelity spring-damper contact, A12-A13) or ``"rigid"`` (eq. (2)-(6) as written,
+    A15); ``servo``: ``"position"`` (the paper's position-controlled joints, A7) or
+    ``"prescribed"``; ``margin`` [m]: candidate contacts are those with a gap below it. The step
+    reads the law and the servo as objects, ``law`` and ``joint_servo``, resolved from the names.
     """
 
-    dt: float = 1e-3
+    dt: float = DEFAULT_DT
     contact: str = "compliant"
     servo: str = "position"
     margin: float = 0.01
@@ -73,16 +73,25 @@ class StepSettings:
         """Check every setting by its rule (:mod:`cobra_ref.infra.validation`): dt within
         [DT_MIN, DT_MAX] (A14), a known contact law and servo, a margin in [0, 1] m; a
         ``ValidationError`` (a ValueError) names the field, the value and the allowed range."""
-        from .infra.validation import RULES, check_choice
-
         RULES["dt"].check(self.dt, "dt")
         check_choice("contact", self.contact, LAWS)
         check_choice("servo", self.servo, SERVOS)
         RULES["margin"].check(self.margin, "margin")
 
+    @property
+    def law(self):
+        """The contact law object of ``contact`` (:data:`cobra_ref.compliance.CONTACT_LAWS`)."""
+        return CONTACT_LAWS[self.contact]
+
+    @property
+    def joint_servo(self):
+        """The joint servo object of ``servo`` (:data:`cobra_ref.compliance.JOINT_SERVOS`)."""
+        return JOINT_SERVOS[self.servo]
+
 
 class StepResult(NamedTuple):
-    """Everything one step computed (the state after it, and what the records need)."""
+    """Everything one step computed (the state after it, and what the records need); built by
+    ``step_result``."""
 
     q: np.ndarray  # configuration after the step
     qd: np.ndarray  # velocity after the step
@@ -103,55 +112,6 @@ class StepResult(NamedTuple):
     memory: dict  # where the next step's friction fixed point starts (warm_start_memory)
 
 
-def step(model: Model, q, qd, t: float, reference, settings: StepSettings = StepSettings(),
-         previous: dict | None = None, tau_ext=None) -> StepResult:
-    """One step from (q, qd) at time t with the joint reference ``reference(t) -> (q, qd, qdd)``.
-
-    Implements: [COBRA] eq. (1)-(6) over one step (module docstring, steps 1-7). ``previous``:
-    where the friction fixed point starts (``StepResult.memory`` of the last step; None: from
-    zero); ``tau_ext`` (nv,): a generalized force held over the step (default none).
-    """
-    dt, joints = settings.dt, joint_coordinates(model)
-    tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
-    q_ref, qd_ref, _ = _reference(reference, t + dt)  # the joints' reference at the end of the step
-    servo_ref = _reference(reference, t)[:2] if settings.servo == "position" else None  # ... and at its start
-    # Step 1: eq. (1), M(q) and h(q, qd)
-    kin = forward_kinematics(model, q)
-    M, h = crba(model, q), bias_force(model, q, midpoint_velocity(qd, previous))
-    # Step 2: the joints -- free coordinates F; prescribed joints move to their reference
-    qd_next = qd.copy()
-    if settings.servo == "prescribed":
-        qd_next[joints.v] = (q_ref - q[joints.q]) / dt
-        F = np.setdiff1d(np.arange(model.nv), joints.v)
-    else:
-        F = np.arange(model.nv)
-    P = np.setdiff1d(np.arange(model.nv), F)
-    # Step 3: eq. (1) without impulses for the free coordinates: M_FF (qd_free - qd)_F = rhs
-    rhs = dt * (tau_ext - h)[F] - M[np.ix_(F, P)] @ (qd_next[P] - qd[P])
-    qd_next[F] = qd[F] + np.linalg.solve(M[np.ix_(F, F)], rhs)
-    # Step 4: eq. (2)-(4), the contacts and J_c
-    contacts = find_contacts(model, q, settings.margin, kin)
-    J_c = contact_jacobian(model, q, contacts, kin)
-    # Step 5: eq. (5), the rows J over F, the Delassus matrix G and the least-action problem
-    J = np.vstack([J_c, _servo_jacobian(model, joints, settings)])
-    G, Minv_JT = delassus(J[:, F], M[np.ix_(F, F)])
-    problem = least_action_problem(model, G, J @ qd_next, contacts, q, qd, servo_ref, settings, joints)
-    # Step 6: eq. (6), the impulses, starting from the previous step's
-    x, info = solve_least_action(problem, warm_start(contacts, previous, len(problem.c)))
-    # Step 7: the velocity after the step, the joint torques, the position
-    qd_next[F] += Minv_JT @ x
-    p = x[:3 * contacts.m]
-    if settings.servo == "prescribed":
-        tau = (M @ (qd_next - qd) / dt + h - J_c.T @ p / dt - tau_ext)[joints.v]
-    else:
-        tau = x[3 * contacts.m:] / dt
-    return StepResult(integrate(model, q, qd_next, dt), qd_next, tau, contacts, p, J_c @ qd_next, info,
-                      kkt_residuals(problem, x), approach_speed(J_c, qd), np.diag(G)[:3 * contacts.m:3],
-                      *energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential_energy(model, q), settings, joints),
-                      q_ref,
-                      warm_start_memory(contacts, x, qd))
-
-
 class JointCoordinates(NamedTuple):
     """Where the revolute joints sit in q and qd, and their limits."""
 
@@ -162,12 +122,107 @@ class JointCoordinates(NamedTuple):
     qd_max: np.ndarray  # (n,) [rad/s] (inf: none)
 
 
-def joint_coordinates(model: Model) -> JointCoordinates:
-    """The actuated (revolute) joints of the model: their q and qd indices and limits.
+class ServoStart(NamedTuple):
+    """The joints at the step's start, from which the position servo's rows are written."""
 
-    Helper: the joints the servo drives (a model may have none: a lone ball or box).
+    joints: JointCoordinates
+    q: np.ndarray  # (n,) joint angles [rad]
+    qd: np.ndarray  # (n,) joint rates [rad/s]
+    reference: tuple | None  # (q_ref, qd_ref) at the step's start; None where the servo reads none
+
+
+def servo_start(joints: JointCoordinates, q, qd, reference) -> ServoStart:
+    """The ``ServoStart`` of the configuration q and velocity qd with the reference (q_ref, qd_ref) or None."""
+    return ServoStart(joints, q[joints.q], qd[joints.v], reference)
+
+
+class StepSystem(NamedTuple):
+    """What steps 1-5 of a step computed: eq. (1) without impulses and the rows' least-action problem."""
+
+    q: np.ndarray  # configuration at the step's start
+    qd: np.ndarray  # velocity at the step's start
+    M: np.ndarray  # (nv, nv) mass matrix
+    h: np.ndarray  # (nv,) bias force at the midpoint velocity
+    tau_ext: np.ndarray  # (nv,) generalized force held over the step
+    qd_free: np.ndarray  # (nv,) velocity after the step without impulses (prescribed joints at their secant)
+    F: np.ndarray | slice  # the free coordinates
+    Minv_JT: np.ndarray  # (|F|, rows) M_FF^-1 J_F^T
+    contacts: Contacts
+    J_c: np.ndarray  # (3m, nv) contact Jacobian
+    G: np.ndarray  # (rows, rows) Delassus matrix
+    problem: LeastAction
+    joints: JointCoordinates
+    q_ref: np.ndarray  # (n_joints,) the joints' reference at the end of the step
+    potential: float  # gravitational potential energy at the step's start [J]
+
+
+def step(model: Model, q, qd, t: float, reference, settings: StepSettings = StepSettings(),
+         previous: dict | None = None, tau_ext=None) -> StepResult:
+    """One step from (q, qd) at time t with the joint reference ``reference(t) -> (q, qd, qdd)``.
+
+    Implements: [COBRA] eq. (1)-(6) over one step (module docstring, steps 1-7). ``previous``:
+    where the friction fixed point starts (``StepResult.memory`` of the last step; None: from
+    zero); ``tau_ext`` (nv,): a generalized force held over the step (default none).
     """
-    revolute = [i for i, jt in enumerate(model.joint_type) if jt != "free"]
+    dt, joints, servo = settings.dt, joint_coordinates(model), settings.joint_servo
+    tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
+    q_ref, qd_ref, _ = _reference(reference, t + dt)  # the joints' reference at the end of the step
+    servo_ref = _reference(reference, t)[:2] if servo.reads_start else None  # ... and at its start
+    # Step 1: eq. (1), M(q) and h(q, qd)
+    kin = forward_kinematics(model, q)
+    M, h = crba(model, q), bias_force(model, q, midpoint_velocity(qd, previous))
+    # Step 2: the joints -- free coordinates F; prescribed joints move to their reference
+    qd_next = qd.copy()
+    servo.prescribe(qd_next, q, q_ref, joints, dt)
+    F = servo.free(model.nv, joints)
+    P = np.setdiff1d(np.arange(model.nv), F)
+    # Step 3: eq. (1) without impulses for the free coordinates: M_FF (qd_free - qd)_F = rhs
+    rhs = dt * (tau_ext - h)[F] - M[np.ix_(F, P)] @ (qd_next[P] - qd[P])
+    qd_next[F] = qd[F] + np.linalg.solve(M[np.ix_(F, F)], rhs)
+    # Step 4: eq. (2)-(4), the contacts and J_c
+    contacts = find_contacts(model, q, settings.margin, kin)
+    J_c = contact_jacobian(model, q, contacts, kin)
+    # Step 5: eq. (5), the rows J over F, the Delassus matrix G and the least-action problem
+    J = np.vstack([J_c, servo.jacobian(model.nv, joints)])
+    G, Minv_JT = delassus(J[:, F], M[np.ix_(F, F)])
+    problem = least_action_problem(model, G, J @ qd_next, contacts, settings, servo_start(joints, q, qd, servo_ref))
+    system = StepSystem(q, qd, M, h, tau_ext, qd_next, F, Minv_JT, contacts, J_c, G, problem, joints, q_ref,
+                        potential_energy(model, q))
+    # Step 6: eq. (6), the impulses, starting from the previous step's
+    x, info = solve_least_action(problem, warm_start(contacts, previous, len(problem.c)))
+    # Step 7: the velocity after the step, the joint torques, the position
+    return step_result(model, system, x, info, settings, lambda q0, qd1: integrate(model, q0, qd1, dt))
+
+
+def step_result(model: Model, system: StepSystem, x: np.ndarray, info: LeastActionInfo, settings: StepSettings,
+                integrate_step) -> StepResult:
+    """Step 7 of a step (module docstring) from the impulses x of its ``system``: the one place a
+    ``StepResult`` is built, by both steppers.
+
+    Implements: [COBRA] eq. (1) with the impulses, qd+ = qd_free + M_FF^-1 J^T x, the joint torques
+    (``StepSettings.joint_servo``), the energy ledger (``energies``) and q+ =
+    ``integrate_step(q, qd+)``.
+    """
+    s, m, dt = system, system.contacts.m, settings.dt
+    qd_next = s.qd_free.copy()
+    qd_next[s.F] += s.Minv_JT @ x
+    p = x[:3 * m]
+
+    def recovered():  # eq. (1) solved for the joints' generalized forces
+        return (s.M @ (qd_next - s.qd) / dt + s.h - s.J_c.T @ p / dt - s.tau_ext)[s.joints.v]
+
+    tau = settings.joint_servo.torque(x[3 * m:], dt, recovered)
+    return StepResult(q=integrate_step(s.q, qd_next), qd=qd_next, tau=tau, contacts=s.contacts, p=p,
+                      w=s.J_c @ qd_next, info=info, residuals=kkt_residuals(s.problem, x),
+                      approach=approach_speed(s.J_c, s.qd), G_NN=np.diag(s.G)[:3 * m:3],
+                      **energies(model, s, qd_next, p, tau, settings), q_ref=s.q_ref,
+                      memory=warm_start_memory(s.contacts, x, s.qd))
+
+
+def joint_coordinates(model: Model) -> JointCoordinates:
+    """The actuated (revolute) joints of the model, which the servo drives (a model may have none:
+    a lone ball or box): their q and qd indices and limits."""
+    revolute = [i for i, jt in enumerate(model.joint_type) if JOINT_NV[jt] == 1]  # one rate: Rx, Ry or Rz
     qd_limit = model.qd_limit or (np.inf,) * model.nb
     return JointCoordinates(np.array([model.q_idx[i].start for i in revolute], dtype=int),
                             np.array([model.v_idx[i].start for i in revolute], dtype=int),
@@ -176,46 +231,34 @@ def joint_coordinates(model: Model) -> JointCoordinates:
                             np.array([qd_limit[i] for i in revolute], dtype=float))
 
 
-def _servo_jacobian(model: Model, joints: JointCoordinates, settings: StepSettings) -> np.ndarray:
-    """The servo rows' Jacobian: one unit row per joint rate (none for prescribed joints)."""
-    if settings.servo == "prescribed":
-        return np.zeros((0, model.nv))
-    return np.eye(model.nv)[joints.v]
-
-
-def least_action_problem(model: Model, G, c_free, contacts: Contacts, q, qd, servo_ref, settings: StepSettings,
-                         joints: JointCoordinates) -> LeastAction:
+def least_action_problem(model: Model, G, c_free, contacts: Contacts, settings: StepSettings,
+                         start: ServoStart) -> LeastAction:
     """The least-action problem of eq. (6): H = G + R and c = J qd_free + b over the rows.
 
     Implements: [COBRA] eq. (5)-(6) with each row's compliance R and offset b
-    (:mod:`cobra_ref.compliance`): contact normals and friction under ``settings.contact``,
-    then the servo rows (position servo, from the step's start (q, qd) towards
-    ``servo_ref`` = (q_ref, qd_ref), the reference at the step's start; None for prescribed
-    joints), bounded by tau_max dt; ``joints``: the model's ``joint_coordinates``.
+    (:mod:`cobra_ref.compliance`): contact normals and friction under ``settings.law``, then the
+    rows of ``settings.joint_servo`` (the position servo's, from ``start``: the joints' state and
+    reference at the step's start), bounded by tau_max dt.
     """
-    m, dt, law = contacts.m, settings.dt, settings.contact
+    m, dt, law = contacts.m, settings.dt, settings.law
     d = np.diag(G)
-    R_N, b_N = compliance.normal_rows(model, contacts.g, d[0:3 * m:3], dt, law)
+    R_N, b_N = law.normal_rows(model, contacts.g, d[0:3 * m:3], dt)
     R, b = np.zeros(len(d)), np.zeros(len(d))
     R[0:3 * m:3], b[0:3 * m:3] = R_N, b_N
-    R[1:3 * m:3] = compliance.tangential_compliance(d[1:3 * m:3], law)
-    R[2:3 * m:3] = compliance.tangential_compliance(d[2:3 * m:3], law)
-    lo = hi = np.zeros(0)
-    if settings.servo == "position":
-        R[3 * m:], b[3 * m:] = compliance.servo_rows(model, q[joints.q], qd[joints.v], *servo_ref, d[3 * m:], dt)
-        lo, hi = -joints.tau_max * dt, joints.tau_max * dt
+    R[1:3 * m:3] = law.tangential_compliance(d[1:3 * m:3])
+    R[2:3 * m:3] = law.tangential_compliance(d[2:3 * m:3])
+    R[3 * m:], b[3 * m:], lo, hi = settings.joint_servo.rows(model, start, d[3 * m:], dt)
     # each contact's coefficient of friction, looked up by its kind
     mu_of_kind = np.empty(3)
     mu_of_kind[[ROBOT_GROUND, ROBOT_BOX, BOX_GROUND]] = model.mu, model.mu_rb, model.mu_bg
     mu = mu_of_kind[contacts.kind]
-    v_s = model.stiction_velocity if law == "compliant" else 0.0
-    return LeastAction(G + np.diag(R), c_free + b, mu, lo, hi, v_s)
+    return LeastAction(G + np.diag(R), c_free + b, mu, lo, hi, law.stiction_velocity(model))
 
 
 def warm_start(contacts: Contacts, previous: dict | None, n: int) -> np.ndarray:
     """x (n,) where the friction fixed point starts: each row's impulse in the previous step.
 
-    Helper: ``previous`` (``warm_start_memory``) maps a contact key to its world impulse vector,
+    ``previous`` (``warm_start_memory``) maps a contact key to its world impulse vector,
     read in this step's contact frame; a new contact starts at 0; the servo rows start at the
     previous step's servo impulses.
     """
@@ -234,9 +277,7 @@ def warm_start(contacts: Contacts, previous: dict | None, n: int) -> np.ndarray:
 def warm_start_memory(contacts: Contacts, x: np.ndarray, qd: np.ndarray) -> dict:
     """What the next step reads: the world impulse vector (3,) of each contact that carried one,
     by contact key, and the servo rows' impulses (``warm_start``), and this step's starting
-    velocity qd (``midpoint_velocity``).
-
-    Helper: the memory of the step from one step to the next.
+    velocity qd (``midpoint_velocity``): the memory of the step from one step to the next.
     """
     m = contacts.m
     P = np.einsum("kij,kj->ki", contacts.frame, x[:3 * m].reshape(m, 3))
@@ -271,22 +312,21 @@ def approach_speed(J_c: np.ndarray, qd) -> np.ndarray:
     return np.maximum(-(J_c[0::3] @ qd), 0.0)
 
 
-def energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential: float, settings: StepSettings,
-             joints: JointCoordinates):
-    """(kinetic, potential, elastic, work_actuators, work_contacts) of one step (StepResult).
+def energies(model: Model, system: StepSystem, qd_next, p, tau, settings: StepSettings) -> dict:
+    """{kinetic, potential, elastic, work_actuators, work_contacts} of one step (StepResult): the
+    energy ledger, at the midpoint velocity qd_mid = (qd + qd+) / 2, for which
+    Delta KE = qd_mid . M (qd+ - qd) exactly at fixed M.
 
-    Helper: the energy ledger, at the midpoint velocity qd_mid = (qd + qd+) / 2, for which
-    Delta KE = qd_mid . M (qd+ - qd) exactly at fixed M: the bodies' balance is
-    W_act + W_contact = Delta (KE + PE). The elastic energy is sum 1/2 k g^2 over the
-    compressed contacts (g < 0) of the compliant law, so the contacts dissipate
-    -W_contact - Delta E_elastic.
+    The bodies' balance is W_act + W_contact = Delta (KE + PE). The elastic energy is
+    sum 1/2 k g^2 over the compressed contacts (g < 0) of the compliant law
+    (``settings.law.elastic_energy``), so the contacts dissipate -W_contact - Delta E_elastic.
     """
-    qd_mid = 0.5 * (qd + qd_next)
-    elastic = 0.0
-    if settings.contact == "compliant":
-        elastic = float(0.5 * model.contact_stiffness * np.sum(np.minimum(contacts.g, 0.0) ** 2))
-    return (0.5 * float(qd @ M @ qd), potential, elastic, settings.dt * float(tau @ qd_mid[joints.v]),
-            float(p @ (J_c @ qd_mid)))
+    s = system
+    qd_mid = 0.5 * (s.qd + qd_next)
+    return {"kinetic": 0.5 * float(s.qd @ s.M @ s.qd), "potential": s.potential,
+            "elastic": settings.law.elastic_energy(model, s.contacts.g),
+            "work_actuators": settings.dt * float(tau @ qd_mid[s.joints.v]),
+            "work_contacts": float(p @ (s.J_c @ qd_mid))}
 
 
 def _reference(reference, t: float):

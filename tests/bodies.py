@@ -6,9 +6,9 @@ a hand-solvable rigid body on the ground (M of its coordinates is blockdiag(m 1,
 
 import numpy as np
 
-from cobra_ref.fast.stepper import FastStepper
 from cobra_ref.model import BoxGeom, Model, SphereSet
-from cobra_ref.step import StepSettings, step
+from cobra_ref.step import StepSettings
+from cobra_ref.steppers import make_stepper
 
 GRAVITY = 9.81  # [m/s^2]
 BALL_MASS, BALL_RADIUS = 1.0, 0.1  # [kg], [m]
@@ -56,15 +56,11 @@ def no_joints(t):
 
 
 def run(model, q, qd, n_steps, settings=StepSettings(), stepper="fast", tau_ext=None, reference=no_joints):
-    """Take n_steps steps from (q, qd) at t = 0; returns the final (q, qd) and every StepResult."""
-    fast, previous, results = FastStepper(model, settings), None, []
+    """Take n_steps steps from (q, qd) at t = 0 with a new stepper named ``stepper``
+    (``steppers.STEPPERS``); returns the final (q, qd) and every StepResult."""
+    stepping, results = make_stepper(stepper, model, settings), []
     for k in range(n_steps):
-        t = k * settings.dt
-        if stepper == "fast":
-            res = fast.step(q, qd, t, reference, tau_ext)
-        else:
-            res = step(model, q, qd, t, reference, settings, previous, tau_ext)
-            previous = res.memory
+        res = stepping.step(q, qd, k * settings.dt, reference, tau_ext)
         q, qd = res.q, res.qd
         results.append(res)
     return q, qd, results

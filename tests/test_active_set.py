@@ -10,7 +10,7 @@ import numpy as np
 import osqp
 from scipy import sparse
 
-from cobra_ref.fast.active_set import box_certificate, held_at_bounds, solve_box
+from cobra_ref.fast.active_set import BoxQP, box_certificate, held_at_bounds, solve_box
 from cobra_ref.fast.least_action import FastBoxQP
 from cobra_ref.qp import EPS, solve_box_qp
 
@@ -24,7 +24,7 @@ def test_diagonal_box_qp_is_solved_by_clipping_the_unconstrained_minimiser():
     """
     H, c = np.diag([1.0, 2.0, 4.0]), np.array([-3.0, 1.0, -2.0])
     lo, hi = np.array([0.0, 0.0, -1.0]), np.array([2.0, np.inf, 1.0])
-    x, at_lo, at_hi, r = solve_box(H, c, lo, hi, np.zeros(3), EPS, EPS)
+    x, at_lo, at_hi, r = solve_box(BoxQP(H, c, lo, hi), np.zeros(3), (EPS, EPS))
     np.testing.assert_allclose(x, [2.0, 0.0, 0.5], atol=1e-15)
     np.testing.assert_array_equal(at_lo, [False, True, False])
     np.testing.assert_array_equal(at_hi, [True, False, False])
@@ -40,7 +40,7 @@ def test_a_coupled_box_qp_reaches_the_minimiser_from_a_wrong_start_in_a_few_roun
     Started from (0, 5) (x_0 held, x_1 free: the wrong set), the rounds must find it.
     """
     H, c = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-4.0, 1.0])
-    x, at_lo, at_hi, r = solve_box(H, c, np.zeros(2), np.full(2, np.inf), np.array([0.0, 5.0]), EPS, EPS)
+    x, at_lo, at_hi, r = solve_box(BoxQP(H, c, np.zeros(2), np.full(2, np.inf)), np.array([0.0, 5.0]), (EPS, EPS))
     np.testing.assert_allclose(x, [2.0, 0.0], atol=1e-14)
     np.testing.assert_allclose(r, [0.0, 3.0], atol=1e-14)
 
@@ -61,7 +61,7 @@ def test_the_box_certificate_accepts_the_minimiser_and_refuses_each_kind_of_wron
     no, yes = False, True
 
     def certified(x, at_lo, at_hi):
-        return box_certificate(H, c, lo, hi, np.array(x), np.array(at_lo), np.array(at_hi), EPS, EPS)
+        return box_certificate(BoxQP(H, c, lo, hi), np.array(x), np.array(at_lo), np.array(at_hi), (EPS, EPS))
 
     assert certified([2.0, 0.0], [no, yes], [no, no])
     assert not certified([3.0, -2.0], [no, no], [no, no])
@@ -114,7 +114,7 @@ def test_certified_solutions_equal_osqp_on_random_least_action_qps(rng):
             solutions.append(solver.solve(raise_error=False))
         loose, tight = solutions
         assert tight.info.status == "solved"
-        answer = solve_box(H, c, lo, hi, loose.x, EPS, EPS, guess=held_at_bounds(loose.x, lo, hi, loose.y))
+        answer = solve_box(BoxQP(H, c, lo, hi), loose.x, (EPS, EPS), guess=held_at_bounds(loose.x, lo, hi, loose.y))
         if answer is None:
             continue
         accepted += 1

@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from bodies import BALL_MASS, BALL_RADIUS, GRAVITY, at_height, ball, run
-from cobra_ref.compliance import contact_theta, normal_rows
+from cobra_ref.compliance import CONTACT_LAWS, contact_theta
 from cobra_ref.step import StepSettings
 from cobra_ref.infra.validation import DT_MAX, DT_MIN
 
@@ -21,11 +21,11 @@ def step_map(model, mass: float, dt: float) -> np.ndarray:
     """The 2 x 2 matrix A with (g+, w+) = A (g, w) of one engaged contact of mass ``mass`` without gravity.
 
     The contact row's optimality condition w+ + R x + b = 0 with w+ = w + x / mass (G = 1 / mass),
-    then g+ = g + dt w+; (R, b) from ``normal_rows``, which is linear in g (b = 0 at g = 0).
+    then g+ = g + dt w+; (R, b) from the compliant law's ``normal_rows``, which is linear in g (b = 0 at g = 0).
     """
     A = np.zeros((2, 2))
     for j, (g, w) in enumerate([(1.0, 0.0), (0.0, 1.0)]):
-        R, b = np.broadcast_arrays(*normal_rows(model, np.array([g]), np.array([1.0 / mass]), dt, "compliant"))
+        R, b = np.broadcast_arrays(*CONTACT_LAWS["compliant"].normal_rows(model, np.array([g]), np.array([1.0 / mass]), dt))
         x = -(w + b[0]) / (1.0 / mass + R[0])
         w_next = w + x / mass
         A[:, j] = g + dt * w_next, w_next
@@ -59,7 +59,7 @@ def test_the_contact_spring_adds_no_damping_while_dt_is_at_most_d_over_k():
     model = ball()
     k, d = model.contact_stiffness, model.contact_damping
     for dt in (DT_MIN, 5e-4, 1e-3, 1.5e-3, 2e-3, DT_MAX):
-        R, b = np.broadcast_arrays(*normal_rows(model, np.array([-1e-5]), np.array([1.0]), dt, "compliant"))
+        R, b = np.broadcast_arrays(*CONTACT_LAWS["compliant"].normal_rows(model, np.array([-1e-5]), np.array([1.0]), dt))
         damping = 1.0 / (R[0] * dt)
         np.testing.assert_allclose(damping, max(d, k * dt), rtol=1e-12)
         np.testing.assert_allclose(b[0], k * -1e-5 / damping, rtol=1e-12)  # the spring's force k g over that damping

@@ -13,19 +13,18 @@ from cobra_ref import contact as reference
 from cobra_ref.contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND
 from cobra_ref.fast import contacts as fast
 from cobra_ref.fast.chain import ChainModel
+from cobra_ref.fast.gaps import contact_frames, sphere_box_gaps
 from cobra_ref.gaps import (
     box_corner_plane_gaps,
     contact_frame,
-    contact_frames,
     sphere_box_gap,
-    sphere_box_gaps,
     sphere_plane_gap,
 )
 from cobra_ref.kinematics import integrate
 from cobra_ref.quaternion import quat_to_rot
 from cobra_ref.gaits import RollingGait
 from cobra_ref.robots import cobra_model
-from cobra_ref.start import placed_state
+from cobra_ref.start import BoxPlacement, placed_state
 
 
 def _rotation(rng):
@@ -69,7 +68,7 @@ def scene(rng):
     """COBRA in its rolling start shape on the ground, the box 4 mm from a link sphere and turned,
     every joint nudged: contacts of all three kinds within a 1 cm margin."""
     model = cobra_model()
-    q, qd = placed_state(model, RollingGait(), box_offset=(0.12, 0.0)), np.zeros(model.nv)
+    q, qd = placed_state(model, RollingGait(), BoxPlacement(offset=(0.12, 0.0))), np.zeros(model.nv)
     q[7:18] += rng.normal(scale=0.02, size=11)
     chain = ChainModel(model)
     terms = chain.terms(q, qd)

@@ -18,7 +18,8 @@ import pytest
 
 from cobra_ref import compliance
 from cobra_ref.fast.least_action import FastBoxQP
-from cobra_ref.least_action import (FP_TOL, LeastAction, coulomb_newton, delassus, kkt_residuals, natural_residual,
+from cobra_ref.coulomb_newton import coulomb_newton
+from cobra_ref.least_action import (FP_TOL, LeastAction, delassus, kkt_residuals, natural_residual,
                                     project_disk, project_friction, solve_least_action, turn, turn_tangents)
 from cobra_ref.qp import EPS
 

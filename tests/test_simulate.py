@@ -7,7 +7,7 @@ from cobra_ref.fast.stepper import FastStepper
 from cobra_ref.gaits import RollingGait, gait
 from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import simulate
-from cobra_ref.start import SETTLE_SPEED, _Hold, initial_state, placed_state
+from cobra_ref.start import SETTLE_SPEED, BoxPlacement, _Hold, initial_state, placed_state
 from cobra_ref.step import SimulationError, StepSettings, step
 
 
@@ -68,7 +68,7 @@ def test_the_fast_and_the_reference_stepper_push_the_box_alike_for_half_a_second
     the box (the box 5 mm from the middle link), each takes its own 500 steps; the states stay
     equal to 1e-9 (measured: 1e-15 in q), the box moving by about 2.5 cm meanwhile."""
     model, reference, settings = cobra_model(), RollingGait(), StepSettings()
-    q, qd = initial_state(model, reference, settings, box_gap=0.005)
+    q, qd = initial_state(model, reference, settings, BoxPlacement(gap=0.005))
     fast = FastStepper(model, settings)
     k = 0
     while True:
@@ -162,7 +162,7 @@ def test_box_direction_puts_the_box_that_way_facing_the_robot():
     model = cobra_model()
     ref = RollingGait()
     d = np.array([-0.6, -0.8])
-    q = placed_state(model, ref, box_direction=d)
+    q = placed_state(model, ref, BoxPlacement(direction=d))
     kin = forward_kinematics(model, q)
     mids = [model.body_names.index(n) for n in ("L5", "L6")]
     middle = np.mean([kin.o[i] + kin.R[i] @ model.com[i] for i in mids], axis=0)[:2]
@@ -174,7 +174,7 @@ def test_box_direction_puts_the_box_that_way_facing_the_robot():
     assert 2 * np.arctan2(qz, qw) == pytest.approx(np.arctan2(d[1], d[0]))
     for bad in ([0.0, 0.0], [np.nan, 1.0]):
         with pytest.raises(ValueError, match="box_direction"):
-            placed_state(model, ref, box_direction=bad)
+            BoxPlacement(direction=bad)
 
 
 @pytest.mark.parametrize("name", ["C", "sidewinding"])

@@ -20,11 +20,17 @@ from bodies import (BALL_MASS, BALL_RADIUS, BOX_MASS, BOX_SIDE, GRAVITY, at_heig
 from cobra_ref.compliance import BAUMGARTE, RIGID_COMPLIANCE
 from cobra_ref.dynamics import kinetic_energy
 from cobra_ref.fast.chain import ChainModel
-from cobra_ref.fast.stepper import FastStepper
-from cobra_ref.step import StepSettings, step
+from cobra_ref.step import StepSettings
+from cobra_ref.steppers import STEPPERS, make_stepper
 
 DT = 1e-3
 RIGID, COMPLIANT = StepSettings(contact="rigid"), StepSettings(contact="compliant")
+
+
+@pytest.fixture(params=STEPPERS)
+def stepper(request):
+    """Each hand-solvable example runs on every stepper (``steppers.STEPPERS``)."""
+    return request.param
 
 
 @pytest.mark.parametrize("build, mass, inertia", [(ball, BALL_MASS, ball_inertia), (box, BOX_MASS, box_inertia)])
@@ -46,7 +52,7 @@ def test_a_free_body_has_the_mass_matrix_blockdiag_m_and_I(build, mass, inertia,
 # ------------------------------------------------------------------------------ resting
 
 
-def test_a_ball_resting_on_rigid_ground_gets_its_weight_and_sinks_only_by_the_regularization():
+def test_a_ball_resting_on_rigid_ground_gets_its_weight_and_sinks_only_by_the_regularization(stepper):
     """Rigid law at rest: p_N -> m g dt, and the ball sinks to delta = eps g dt^2 / beta.
 
     Per step the law is w_N + R p_N + b = 0 with R = eps G_NN (eps = RIGID_COMPLIANCE,
@@ -56,14 +62,14 @@ def test_a_ball_resting_on_rigid_ground_gets_its_weight_and_sinks_only_by_the_re
     """
     model = ball()
     q0, qd0 = at_height(model, BALL_RADIUS)
-    q, qd, results = run(model, q0, qd0, 1000, RIGID)
+    q, qd, results = run(model, q0, qd0, 1000, RIGID, stepper=stepper)
     np.testing.assert_allclose(results[-1].p[0], BALL_MASS * GRAVITY * DT, rtol=1e-6)
     np.testing.assert_allclose(q0[2] - q[2], RIGID_COMPLIANCE * GRAVITY * DT**2 / BAUMGARTE, rtol=1e-2)
     np.testing.assert_allclose(q[:2], 0.0, atol=1e-12)
     np.testing.assert_allclose(qd, 0.0, atol=1e-9)
 
 
-def test_a_ball_dropped_on_compliant_ground_settles_at_the_static_sag_m_g_over_k():
+def test_a_ball_dropped_on_compliant_ground_settles_at_the_static_sag_m_g_over_k(stepper):
     """Compliant law at rest: f_N = k delta, so the ball settles at the sag delta = m g / k.
 
     The default contact: k = 1e6 N/m, d = 1e3 N s/m; 1 kg gives delta = 9.81 um. Dropped from
@@ -72,14 +78,14 @@ def test_a_ball_dropped_on_compliant_ground_settles_at_the_static_sag_m_g_over_k
     """
     model = ball()
     q0, qd0 = at_height(model, BALL_RADIUS + 1e-3)
-    q, qd, results = run(model, q0, qd0, 300, COMPLIANT)
+    q, qd, results = run(model, q0, qd0, 300, COMPLIANT, stepper=stepper)
     sag = BALL_MASS * GRAVITY / model.contact_stiffness
     np.testing.assert_allclose(BALL_RADIUS - q[2], sag, rtol=1e-2)
     np.testing.assert_allclose(results[-1].p[0], BALL_MASS * GRAVITY * DT, rtol=1e-9)
 
 
 @pytest.mark.parametrize("zeta, bounces", [(1.0, False), (0.05, True)])
-def test_a_critically_damped_drop_does_not_bounce_and_a_lightly_damped_one_does(zeta, bounces, k=1e4):
+def test_a_critically_damped_drop_does_not_bounce_and_a_lightly_damped_one_does(stepper, zeta, bounces, k=1e4):
     """A spring-damper of damping ratio zeta = d / (2 sqrt(k m)): critical (zeta = 1) does not
     rebound; zeta = 0.05 does (the contact lets go: the ball leaves the ground again).
 
@@ -90,12 +96,12 @@ def test_a_critically_damped_drop_does_not_bounce_and_a_lightly_damped_one_does(
     d = 2 * zeta * np.sqrt(k * BALL_MASS)
     model = ball(contact_stiffness=k, contact_damping=d)
     q0, qd0 = at_height(model, BALL_RADIUS, v=(0.0, 0.0, -1.0))
-    _, _, results = run(model, q0, qd0, 300, COMPLIANT)
+    _, _, results = run(model, q0, qd0, 300, COMPLIANT, stepper=stepper)
     heights = np.array([res.q[2] for res in results]) - BALL_RADIUS
     assert (heights.max() > 1e-4) == bounces, f"zeta = {zeta}: max height after touchdown {heights.max():.2e} m"
 
 
-def test_the_compliant_contact_tends_to_the_rigid_one_as_it_stiffens():
+def test_the_compliant_contact_tends_to_the_rigid_one_as_it_stiffens(stepper):
     """Rigid contact is the k, d -> infinity limit of the compliant one (compliance module).
 
     A ball lands at 1 m/s and comes to rest. The compliant ground (critically damped,
@@ -108,7 +114,7 @@ def test_the_compliant_contact_tends_to_the_rigid_one_as_it_stiffens():
     def landed(settings, **law):
         model = ball(**law)
         q0, qd0 = at_height(model, BALL_RADIUS, v=(0.0, 0.0, -1.0))
-        q, _, results = run(model, q0, qd0, 100, settings)
+        q, _, results = run(model, q0, qd0, 100, settings, stepper=stepper)
         return q[2], sum(res.p[0] for res in results)
 
     rigid_height, rigid_impulse = landed(RIGID)
@@ -126,7 +132,8 @@ def test_the_compliant_contact_tends_to_the_rigid_one_as_it_stiffens():
 
 @pytest.mark.parametrize("settings", [COMPLIANT, RIGID], ids=["compliant", "rigid"])
 @pytest.mark.parametrize("angle", [0.0, 22.5, 30.0, 45.0])
-def test_a_sliding_box_decelerates_at_mu_g_along_its_velocity_in_every_direction(angle, settings, mu=0.5, v0=1.0):
+def test_a_sliding_box_decelerates_at_mu_g_along_its_velocity_in_every_direction(stepper, angle, settings, mu=0.5,
+                                                                              v0=1.0):
     """Coulomb's circle: a box sliding at any angle to the contact frame (t1 = x) decelerates at
     exactly mu g and keeps its heading.
 
@@ -138,7 +145,7 @@ def test_a_sliding_box_decelerates_at_mu_g_along_its_velocity_in_every_direction
     direction = np.array([np.cos(np.radians(angle)), np.sin(np.radians(angle)), 0.0])
     model = box(mu=mu)
     q0, qd0 = at_height(model, BOX_SIDE / 2, v=v0 * direction)
-    q, qd, results = run(model, q0, qd0, 100, settings)
+    q, qd, results = run(model, q0, qd0, 100, settings, stepper=stepper)
     speed = np.linalg.norm(qd[:2])
     np.testing.assert_allclose((v0 - speed) / 0.1, mu * GRAVITY, rtol=1e-2)
     heading = np.degrees(np.arctan2(qd[1], qd[0]))
@@ -150,7 +157,8 @@ def test_a_sliding_box_decelerates_at_mu_g_along_its_velocity_in_every_direction
 
 
 @pytest.mark.parametrize("settings", [COMPLIANT, RIGID], ids=["compliant", "rigid"])
-def test_a_box_sliding_under_a_steady_sideways_force_follows_coulombs_law(settings, mu=0.5, v0=1.0, ratio=0.6):
+def test_a_box_sliding_under_a_steady_sideways_force_follows_coulombs_law(stepper, settings, mu=0.5, v0=1.0,
+                                                                          ratio=0.6):
     """A box sliding along x at v0 feels a constant force F = 0.6 mu m g along y at its centre.
 
     Coulomb's law (integrated here with scipy): m v' = F e_y - mu m g v / |v| while it slides,
@@ -164,7 +172,7 @@ def test_a_box_sliding_under_a_steady_sideways_force_follows_coulombs_law(settin
     tau_ext = np.zeros(6)
     tau_ext[1] = F
     T, n = 0.15, 150
-    q, qd, _ = run(model, q0, qd0, n, settings, tau_ext=tau_ext)
+    q, qd, _ = run(model, q0, qd0, n, settings, tau_ext=tau_ext, stepper=stepper)
 
     def coulomb(t, y):
         v = y[2:]
@@ -177,7 +185,8 @@ def test_a_box_sliding_under_a_steady_sideways_force_follows_coulombs_law(settin
 
 @pytest.mark.parametrize("settings", [COMPLIANT, RIGID], ids=["compliant", "rigid"])
 @pytest.mark.parametrize("angle", [0.0, 30.0, 45.0, 90.0])
-def test_a_sphere_sliding_without_spin_ends_rolling_at_five_sevenths_of_its_speed(angle, settings, mu=0.5, v0=1.0):
+def test_a_sphere_sliding_without_spin_ends_rolling_at_five_sevenths_of_its_speed(stepper, angle, settings, mu=0.5,
+                                                                               v0=1.0):
     """A solid sphere thrown at v0 without spin: friction slows its centre and spins it up until it
     rolls without slipping, at v = 5/7 v0 (angular momentum about the contact point is conserved:
     m v0 r = m v r + 2/5 m r^2 v / r), after t = 2 v0 / (7 mu g) = 0.058 s; in every direction.
@@ -186,7 +195,7 @@ def test_a_sphere_sliding_without_spin_ends_rolling_at_five_sevenths_of_its_spee
     direction = np.array([np.cos(np.radians(angle)), np.sin(np.radians(angle)), 0.0])
     model = ball(mu=mu)
     q0, qd0 = at_height(model, BALL_RADIUS, v=v0 * direction)
-    q, qd, _ = run(model, q0, qd0, 100, settings)
+    q, qd, _ = run(model, q0, qd0, 100, settings, stepper=stepper)
     np.testing.assert_allclose(qd[:3], 5 / 7 * v0 * direction, atol=1e-2 * v0)
     slip = qd[:3] + np.cross(qd[3:6], [0.0, 0.0, -BALL_RADIUS])  # the contact point's velocity (unturned ball)
     assert np.linalg.norm(slip[:2]) < 1e-3 * v0, f"still slipping at {slip}"
@@ -201,31 +210,31 @@ def _incline(theta_deg):
     return (GRAVITY * np.sin(th), 0.0, -GRAVITY * np.cos(th))
 
 
-def test_a_box_on_a_rigid_incline_below_the_friction_angle_sticks():
+def test_a_box_on_a_rigid_incline_below_the_friction_angle_sticks(stepper):
     """tan(20 deg) = 0.36 < mu = 0.5: the rigid law holds the box (it creeps only by the
     regularization, below 1e-4 m/s after 0.3 s)."""
     model = free_body("box", BOX_MASS, box_inertia(), boxes=box().boxes, gravity=_incline(20.0), mu=0.5)
     q0, qd0 = at_height(model, BOX_SIDE / 2)
-    q, qd, _ = run(model, q0, qd0, 300, RIGID)
+    q, qd, _ = run(model, q0, qd0, 300, RIGID, stepper=stepper)
     assert np.linalg.norm(qd[:3]) < 1e-4
 
 
-def test_a_box_on_a_compliant_incline_creeps_at_the_stick_slip_velocity_the_law_gives():
+def test_a_box_on_a_compliant_incline_creeps_at_the_stick_slip_velocity_the_law_gives(stepper):
     """The smooth stick-slip friction (A13) holds the box with f_T = mu f_N v / v_s: on 20 degrees
     it creeps at v = v_s tan(20 deg) / mu = 0.73 mm/s (hand solution of the law), within 1 %."""
     model = free_body("box", BOX_MASS, box_inertia(), boxes=box().boxes, gravity=_incline(20.0), mu=0.5)
     q0, qd0 = at_height(model, BOX_SIDE / 2)
-    q, qd, _ = run(model, q0, qd0, 300, COMPLIANT)
+    q, qd, _ = run(model, q0, qd0, 300, COMPLIANT, stepper=stepper)
     np.testing.assert_allclose(np.linalg.norm(qd[:2]), model.stiction_velocity * np.tan(np.radians(20.0)) / 0.5,
                                rtol=1e-2)
 
 
 @pytest.mark.parametrize("settings", [COMPLIANT, RIGID], ids=["compliant", "rigid"])
-def test_a_box_on_an_incline_steeper_than_the_friction_angle_slides_at_g_sin_minus_mu_cos(settings, mu=0.5):
+def test_a_box_on_an_incline_steeper_than_the_friction_angle_slides_at_g_sin_minus_mu_cos(stepper, settings, mu=0.5):
     """tan(35 deg) = 0.70 > mu: the box accelerates at g (sin 35 - mu cos 35) = 1.61 m/s^2, within 1 %."""
     model = free_body("box", BOX_MASS, box_inertia(), boxes=box().boxes, gravity=_incline(35.0), mu=mu)
     q0, qd0 = at_height(model, BOX_SIDE / 2)
-    _, qd, _ = run(model, q0, qd0, 200, settings)
+    _, qd, _ = run(model, q0, qd0, 200, settings, stepper=stepper)
     th = np.radians(35.0)
     np.testing.assert_allclose(qd[0] / 0.2, GRAVITY * (np.sin(th) - mu * np.cos(th)), rtol=1e-2)
 
@@ -237,19 +246,16 @@ def _tumbling_energy_drift(dt, stepper, T=1.0, extrapolate=True):
     """|KE(T) - KE(0)| / KE(0) of a torque-free asymmetric body spun near its intermediate axis."""
     model = free_body("top", 1.0, np.diag([0.01, 0.02, 0.03]), gravity=(0.0, 0.0, 0.0))
     q, qd = at_height(model, 1.0, w=(0.1, 8.0, 0.2))
-    fast, previous = FastStepper(model, StepSettings(dt=dt)), None
+    stepping = make_stepper(stepper, model, StepSettings(dt=dt))
     ke0 = kinetic_energy(model, q, qd)
     for k in range(int(round(T / dt))):
-        if stepper == "fast":
-            res = fast.step(q, qd, k * dt, no_joints)
-        else:
-            res = step(model, q, qd, k * dt, no_joints, StepSettings(dt=dt), previous)
-            previous = res.memory if extrapolate else None
+        if not extrapolate:
+            stepping.memory = None  # no memory of the last step: h at the step's starting velocity
+        res = stepping.step(q, qd, k * dt, no_joints)
         q, qd = res.q, res.qd
     return abs(kinetic_energy(model, q, qd) - ke0) / ke0
 
 
-@pytest.mark.parametrize("stepper", ["fast", "reference"])
 def test_a_tumbling_body_keeps_its_energy_to_second_order_in_dt(stepper):
     """A torque-free body (I = diag(1, 2, 3) 0.01 kg m^2) spun at 8 rad/s near its intermediate axis
     tumbles; its kinetic energy is constant. With the gyroscopic term w x I w at the midpoint
@@ -259,14 +265,13 @@ def test_a_tumbling_body_keeps_its_energy_to_second_order_in_dt(stepper):
     drift = {dt: _tumbling_energy_drift(dt, stepper) for dt in (2e-3, 1e-3)}
     assert drift[2e-3] / drift[1e-3] > 3.5
     assert drift[1e-3] < 1e-3
-    if stepper == "reference":
-        plain = {dt: _tumbling_energy_drift(dt, stepper, extrapolate=False) for dt in (2e-3, 1e-3)}
-        assert 1.8 < plain[2e-3] / plain[1e-3] < 2.2
-        assert plain[1e-3] > 10 * drift[1e-3]
+    plain = {dt: _tumbling_energy_drift(dt, stepper, extrapolate=False) for dt in (2e-3, 1e-3)}
+    assert 1.8 < plain[2e-3] / plain[1e-3] < 2.2
+    assert plain[1e-3] > 10 * drift[1e-3]
 
 
 @pytest.mark.parametrize("settings", [COMPLIANT, RIGID], ids=["compliant", "rigid"])
-def test_a_sliding_box_loses_its_kinetic_energy_to_the_work_of_the_contact_impulses(settings):
+def test_a_sliding_box_loses_its_kinetic_energy_to_the_work_of_the_contact_impulses(stepper, settings):
     """Energy ledger of one body: Delta KE + Delta PE = work of the contact impulses.
 
     The stepper records KE and PE at each step's start, and the contacts' work x . J_c u_mid at
@@ -279,7 +284,7 @@ def test_a_sliding_box_loses_its_kinetic_energy_to_the_work_of_the_contact_impul
     """
     model = box(mu=0.5)
     q0, qd0 = at_height(model, BOX_SIDE / 2, v=(0.8, 0.3, 0.0))
-    _, _, results = run(model, q0, qd0, 200, settings)
+    _, _, results = run(model, q0, qd0, 200, settings, stepper=stepper)
     energy = np.array([r.kinetic + r.potential for r in results])
     work = sum(r.work_contacts for r in results[:-1])
     np.testing.assert_allclose(energy[-1] - energy[0], work, rtol=1e-2)
@@ -291,7 +296,7 @@ def test_a_sliding_box_loses_its_kinetic_energy_to_the_work_of_the_contact_impul
 
 
 @pytest.mark.parametrize("ratio", [0.5, 0.95, 1.05, 1.5])
-def test_a_sphere_pushing_the_box_moves_it_only_once_the_push_exceeds_mu_m_g(ratio, mu=0.5, T=0.3):
+def test_a_sphere_pushing_the_box_moves_it_only_once_the_push_exceeds_mu_m_g(stepper, ratio, mu=0.5, T=0.3):
     """A hand holds a 0.5 kg sphere at the box's mid-height (its weight cancelled) and pushes it
     along +x with F = ratio mu m_box g into the box (rigid law).
 
@@ -309,7 +314,7 @@ def test_a_sphere_pushing_the_box_moves_it_only_once_the_push_exceeds_mu_m_g(rat
     tau_ext = np.zeros(model.nv)
     tau_ext[0], tau_ext[2] = F, m_s * GRAVITY
     n = int(round(T / DT))
-    q, _, _ = run(model, q, np.zeros(model.nv), n, RIGID, tau_ext=tau_ext)
+    q, _, _ = run(model, q, np.zeros(model.nv), n, RIGID, tau_ext=tau_ext, stepper=stepper)
     if ratio < 1:
         assert abs(q[7]) < 1e-4, f"the box must not move for F < mu m g, moved {q[7]:.2e} m"
     else:
@@ -317,7 +322,7 @@ def test_a_sphere_pushing_the_box_moves_it_only_once_the_push_exceeds_mu_m_g(rat
         np.testing.assert_allclose(q[7], a * DT**2 * n * (n + 1) / 2, rtol=1e-2)
 
 
-def test_a_sphere_sliding_on_the_box_feels_the_robot_box_friction_not_the_ground_friction(T=0.05):
+def test_a_sphere_sliding_on_the_box_feels_the_robot_box_friction_not_the_ground_friction(stepper, T=0.05):
     """Per-pair friction (assumption A22): the sphere slides on the box's top face with
     mu_robot_box = 0.2 while the box stands on ground with mu = 0.5.
 
@@ -332,7 +337,7 @@ def test_a_sphere_sliding_on_the_box_feels_the_robot_box_friction_not_the_ground
     qd = np.zeros(model.nv)
     qd[0] = 0.5
     n = int(round(T / DT))
-    q, qd, _ = run(model, q, qd, n, RIGID)
+    q, qd, _ = run(model, q, qd, n, RIGID, stepper=stepper)
     np.testing.assert_allclose(qd[0], 0.5 - n * 0.2 * GRAVITY * DT, rtol=1e-3)
     assert abs(q[7]) < 1e-5, "the box must not move"
 
@@ -360,21 +365,20 @@ def test_the_box_slides_on_the_ground_with_its_own_friction_coefficient(mu_box_g
     """COBRA's box, pushed away from the robot at 1 m/s, decelerates at mu_bg g: 0.3 g with
     mu_box_ground = 0.3, and mu g = 1.0 g when it is left None (the same as the robot's
     ground friction, A13). Within 1 % over 50 ms; the robot holds still, far from the box."""
-    from cobra_ref.fast.stepper import FastStepper
     from cobra_ref.gaits import gait
     from cobra_ref.params import CobraParameters
     from cobra_ref.robots import cobra_model
-    from cobra_ref.start import initial_state
+    from cobra_ref.start import BoxPlacement, initial_state
 
     model = cobra_model(CobraParameters(mu_box_ground=mu_box_ground))
     assert model.mu_bg == expected and model.mu == 1.0 and model.mu_rb == 0.5
     ref = gait("C")
-    q, qd = initial_state(model, ref, StepSettings(), box_offset=(0.0, 0.6))
+    q, qd = initial_state(model, ref, StepSettings(), BoxPlacement(offset=(0.0, 0.6)))
     iv = model.v_idx[model.boxes[0].body].start
     qd[iv:iv + 6] = [v0, 0.0, 0.0, 0.0, 0.0, 0.0]
-    stepper, q_hold = FastStepper(model, StepSettings()), ref(0.0)[0]
+    stepping, q_hold = make_stepper("fast", model, StepSettings()), ref(0.0)[0]
     hold = lambda t: (q_hold, 0 * q_hold, 0 * q_hold)  # noqa: E731
     for k in range(n):
-        res = stepper.step(q, qd, k * 1e-3, hold)
+        res = stepping.step(q, qd, k * 1e-3, hold)
         q, qd = res.q, res.qd
     np.testing.assert_allclose((v0 - qd[iv]) / (n * 1e-3), expected * GRAVITY, rtol=1e-2)

@@ -26,7 +26,7 @@ from cobra_ref.least_action import (LeastAction, coulomb_split, delassus, kkt_re
                                     project_disk, solve_least_action, turn, turn_tangents)
 from cobra_ref.qp import solve_box_qp
 from cobra_ref.start import initial_state
-from cobra_ref.step import StepSettings, joint_coordinates, least_action_problem, step
+from cobra_ref.step import StepSettings, joint_coordinates, least_action_problem, servo_start, step
 
 # pictures go to an ignored folder beside the tutorials (or to $COBRA_REF_OUT)
 OUT = pathlib.Path(os.environ.get("COBRA_REF_OUT", pathlib.Path(__file__).resolve().parent / "out"))
@@ -334,7 +334,7 @@ J = np.vstack([J_c, np.eye(model.nv)[joints.v]])
 G, Minv_JT = delassus(J, M)
 print(f"J: {J.shape}, G: {G.shape}, rank G = {np.linalg.matrix_rank(G)}")
 q_ref, qd_ref, _ = ref(0.0)  # the joints' reference at the step's start, which the servo follows
-problem = least_action_problem(model, G, J @ u_free, contacts, q, qd, (q_ref, qd_ref), settings, joints)
+problem = least_action_problem(model, G, J @ u_free, contacts, settings, servo_start(joints, q, qd, (q_ref, qd_ref)))
 R_rows, b_rows = np.diag(problem.H - G), problem.c - J @ u_free
 
 # %% [markdown]

@@ -1,6 +1,6 @@
 """Certified solves of a box-constrained QP: a guess of the active set, and a KKT proof.
 
-Helper (performance) for the least-action iterates of [COBRA] eq. (6)
+For performance, in the least-action iterates of [COBRA] eq. (6)
 (:func:`cobra_ref.least_action.solve_least_action`): each is a box QP, one iterate differs little
 from the last, and its active set (the contacts released, the friction at its bound, the servo
 rows that saturate) seldom changes from one iterate, or one step, to the next::
@@ -32,6 +32,8 @@ the worst violation beyond its certificate tolerance.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from scipy import linalg
 
@@ -40,10 +42,19 @@ SINGLE_FLIPS = 16  # then rounds that change only the worst violation (full roun
 _posv = linalg.get_lapack_funcs("posv", (np.zeros(1),))
 
 
+class BoxQP(NamedTuple):
+    """min 1/2 x^T H x + c^T x s.t. lo <= x <= hi (H positive definite)."""
+
+    H: np.ndarray  # (n, n)
+    c: np.ndarray  # (n,)
+    lo: np.ndarray  # (n,) lower bounds (-inf: none)
+    hi: np.ndarray  # (n,) upper bounds (inf: none)
+
+
 def held_at_bounds(x, lo, hi, y=None):
     """(at_lo, at_hi): the variables an iterate x holds at their bounds.
 
-    Helper: the first guess of ``solve_box``: a variable within 1e-12 (relative) of a bound, or,
+    The first guess of ``solve_box``: a variable within 1e-12 (relative) of a bound, or,
     with OSQP's duals y, one whose multiplier points at the bound.
     """
     tol = 1e-12 * max(float(np.abs(x).max(initial=0.0)), 1e-300)
@@ -56,13 +67,15 @@ def held_at_bounds(x, lo, hi, y=None):
     return at_lo & np.isfinite(lo), at_hi & np.isfinite(hi)
 
 
-def solve_box(H, c, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = ROUNDS, guess=None):
-    """min 1/2 x^T H x + c^T x s.t. lo <= x <= hi by primal-dual active-set rounds from x0.
+def solve_box(qp: BoxQP, x0, eps: tuple, rounds: int = ROUNDS, guess=None):
+    """The box QP ``qp`` by primal-dual active-set rounds from x0.
 
-    Helper: returns (x, at_lo, at_hi, r) certified by the KKT conditions at OSQP's tolerances,
+    Returns (x, at_lo, at_hi, r) certified by the KKT conditions at OSQP's tolerances
+    ``eps`` = (eps_abs, eps_rel),
     with at_lo/at_hi the masks of the variables held at lo/hi and r = H x + c; or None.
     ``guess``: (at_lo, at_hi) to start from instead of the rule applied to x0.
     """
+    H, c, lo, hi = qp
     d = H.diagonal()
     fixed = lo == hi
     x, before = x0, None
@@ -83,7 +96,7 @@ def solve_box(H, c, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = RO
             at_lo, at_hi = before[0].copy(), before[1].copy()
             free = ~(at_lo | at_hi)
             # each violation in units of its own certificate tolerance (box_certificate)
-            tol_p, tol_d = _box_tolerances(x, r, free, eps_abs, eps_rel)
+            tol_p, tol_d = _box_tolerances(x, r, free, eps)
             violation = np.concatenate([np.where(free, lo - x, 0.0) / tol_p, np.where(free, x - hi, 0.0) / tol_p,
                                         -r * (at_lo & ~fixed) / tol_d, r * at_hi / tol_d])
             worst = int(np.argmax(violation))
@@ -106,29 +119,31 @@ def solve_box(H, c, lo, hi, x0, eps_abs: float, eps_rel: float, rounds: int = RO
             x[F] = x_F
         r = H @ x + c
         # a guessed set is most often right: its solution is certified at once
-        if k == 0 and guess is not None and _certified(c, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, r, fixed, free):
+        if k == 0 and guess is not None and _certified(qp, x, at_lo, at_hi, eps, r, fixed, free):
             return x, at_lo, at_hi, r
     else:
         return None  # the held set still changes: leave it to OSQP
-    if not _certified(c, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, r, fixed, free):
+    if not _certified(qp, x, at_lo, at_hi, eps, r, fixed, free):
         return None
     return x, at_lo, at_hi, r
 
 
-def box_certificate(H, c, lo, hi, x, at_lo, at_hi, eps_abs: float, eps_rel: float, r=None) -> bool:
-    """True if x, with the variables in at_lo/at_hi held at lo/hi, is the minimiser of
-    1/2 x^T H x + c^T x over lo <= x <= hi: the checks of the module docstring for the box form.
+def box_certificate(qp: BoxQP, x, at_lo, at_hi, eps: tuple, r=None) -> bool:
+    """True if x, with the variables in at_lo/at_hi held at lo/hi, is the minimiser of the box QP
+    ``qp``: the checks of the module docstring at the tolerances ``eps`` = (eps_abs, eps_rel).
 
-    Helper: primal feasibility, the multipliers' signs (r = H x + c >= 0 where held at lo, <= 0
+    Primal feasibility, the multipliers' signs (r = H x + c >= 0 where held at lo, <= 0
     where held at hi, either where lo = hi) and stationarity (r = 0 where free), each within
     OSQP's tolerance eps_abs + eps_rel * scale.
     """
-    r = H @ x + c if r is None else r
-    return _certified(c, lo, hi, x, at_lo, at_hi, eps_abs, eps_rel, r, lo == hi, ~(at_lo | at_hi))
+    r = qp.H @ x + qp.c if r is None else r
+    return _certified(qp, x, at_lo, at_hi, eps, r, qp.lo == qp.hi, ~(at_lo | at_hi))
 
 
-def _certified(c, lo, hi, x, at_lo, at_hi, eps_abs: float, eps_rel: float, r, fixed, free) -> bool:
+def _certified(qp: BoxQP, x, at_lo, at_hi, eps: tuple, r, fixed, free) -> bool:
     """``box_certificate`` with r = H x + c, the fixed (lo = hi) and the free variables given."""
+    _, c, lo, hi = qp
+    eps_abs, eps_rel = eps
     abs_g = np.abs(r)
     # OSQP's tolerances (_box_tolerances): |r| times the held mask is |r times that mask|
     tol_p = eps_abs + eps_rel * float(np.abs(x).max())
@@ -143,7 +158,8 @@ def _certified(c, lo, hi, x, at_lo, at_hi, eps_abs: float, eps_rel: float, r, fi
     return bool(np.isfinite(x).all() and float((abs_g * free).max()) <= eps_abs + eps_rel * scale)
 
 
-def _box_tolerances(x, r, free, eps_abs: float, eps_rel: float) -> tuple[float, float]:
+def _box_tolerances(x, r, free, eps: tuple) -> tuple[float, float]:
     """OSQP's tolerances eps_abs + eps_rel * scale for the bounds (scale max |x|) and for the
     multipliers (scale max |r| over the held variables)."""
+    eps_abs, eps_rel = eps
     return (eps_abs + eps_rel * float(np.abs(x).max()), eps_abs + eps_rel * float(np.abs(r * ~free).max()))

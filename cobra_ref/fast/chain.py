@@ -1,6 +1,6 @@
 """Faster path for chains: M, h and Jacobians in world coordinates with batched NumPy.
 
-Helper (performance): the readable recursions in :mod:`cobra_ref.dynamics` stay the
+For performance: the readable recursions in :mod:`cobra_ref.dynamics` stay the
 reference; ``tests/test_fastdyn.py`` checks that this module gives the same M, h, poses and
 Jacobians to 1e-12 at random states. Use it for the time stepper, never as the definition.
 

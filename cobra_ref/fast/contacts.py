@@ -1,6 +1,6 @@
 """The contacts of the scene and their Jacobian J_c, in batches: the fast wing's contact search.
 
-Helper (performance): the same contacts, in the same order and with the same frames, as
+The same contacts, in the same order and with the same frames, as
 :func:`cobra_ref.contact.find_contacts` and :func:`cobra_ref.contact.contact_jacobian` (tested
 equal), computed with batched NumPy from the world-frame chain terms of
 :class:`cobra_ref.fast.chain.ChainModel` instead of one gap function call per pair.
@@ -14,12 +14,13 @@ from .. import gaps as gapfn
 from ..contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND, Contacts
 from ..spatial import skew_rows
 from .chain import ChainModel, ChainTerms
+from .gaps import contact_frames, sphere_box_gaps
 
 
 def find_contacts(model, terms: ChainTerms, margin: float) -> Contacts:
     """Every candidate contact with gap g < margin, in the order of :func:`cobra_ref.contact.find_contacts`.
 
-    Helper: the batched form of the reference contact search (the gap functions of
+    The batched form of the reference contact search (the gap functions of
     :mod:`cobra_ref.gaps` row by row).
     """
     sph = model.spheres
@@ -39,7 +40,7 @@ def find_contacts(model, terms: ChainTerms, margin: float) -> Contacts:
         c_b = (centers - p_b) @ R_b
         near = ((np.abs(c_b) - box.half).max(axis=1) - sph.radius < margin).nonzero()[0]
         if len(near):
-            g_b, n_b, a_b, b_b = gapfn.sphere_box_gaps(centers[near], sph.radius[near], R_b, p_b, box.half)
+            g_b, n_b, a_b, b_b = sphere_box_gaps(centers[near], sph.radius[near], R_b, p_b, box.half)
             k = g_b < margin
             groups.append((ROBOT_BOX, sph.body[near[k]], box.body, near[k], g_b[k], a_b[k], b_b[k]))
             box_normals.append(n_b[k])
@@ -57,7 +58,7 @@ def find_contacts(model, terms: ChainTerms, margin: float) -> Contacts:
     frames = np.empty((len(g), 3, 3))
     frames[:] = GROUND_FRAME
     if sum(len(n_b) for n_b in box_normals):
-        frames[kind == ROBOT_BOX] = gapfn.contact_frames(np.concatenate(box_normals))
+        frames[kind == ROBOT_BOX] = contact_frames(np.concatenate(box_normals))
     return Contacts(kind, body_A, body_B, feature, g, frames, point_A, point_B)
 
 
@@ -68,7 +69,7 @@ _XY = np.array([1.0, 1.0, 0.0])  # point * _XY: the point's projection on the gr
 def contact_jacobian(chain: ChainModel, terms: ChainTerms, contacts: Contacts) -> np.ndarray:
     """Stacked relative contact Jacobian J_c (3m, nv), rows [n, t1, t2]^T (J_A - J_B) per contact.
 
-    Helper: the batched form of :func:`cobra_ref.contact.contact_jacobian`: every body point's
+    The batched form of :func:`cobra_ref.contact.contact_jacobian`: every body point's
     Jacobian is J(x) = S_lin - x × S_ang over the dofs that move the body
     (``ChainModel.point_jacobian``), here for all contacts at once.
     """

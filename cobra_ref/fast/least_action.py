@@ -1,6 +1,6 @@
 """The box QPs of the least-action loop, solved fast: certified active-set solves, OSQP kept warm.
 
-Helper (performance): ``FastBoxQP`` is a drop-in ``solve_qp`` for
+For performance: ``FastBoxQP`` is a drop-in ``solve_qp`` for
 :func:`cobra_ref.least_action.solve_least_action`, which the reference step calls with a fresh
 OSQP solve per iterate (:func:`cobra_ref.qp.solve_box_qp`). Both return the minimiser of the
 same strictly convex QP to OSQP's tolerance (tests run them side by side):
@@ -24,7 +24,7 @@ import osqp
 from scipy import sparse
 
 from ..qp import EPS, MAX_ITER, BoxQPSolution, ContactSolveError
-from .active_set import held_at_bounds, solve_box
+from .active_set import BoxQP, held_at_bounds, solve_box
 
 LOOSE_EPS = 1e-5  # the first OSQP solve of a step: only a guess of the active set
 LOOSE_MAX_ITER = 200
@@ -44,7 +44,7 @@ class FastBoxQP:
     def new_step(self) -> None:
         """Mark the next QP as the first of a step (OSQP solves it).
 
-        Helper: called by the fast stepper before each step.
+        Called by the fast stepper before each step.
         """
         self.first = True
 
@@ -60,7 +60,7 @@ class FastBoxQP:
             solves, iterations = 1, res.info.iter
             if res.info.status in ("solved", "solved inaccurate", "maximum iterations reached"):
                 x0, y = res.x, res.y
-        certified = solve_box(H, c, lo, hi, x0, EPS, EPS, guess=held_at_bounds(x0, lo, hi, y))
+        certified = solve_box(BoxQP(H, c, lo, hi), x0, (EPS, EPS), guess=held_at_bounds(x0, lo, hi, y))
         if certified is not None:
             return BoxQPSolution(certified[0], np.zeros(len(c)), iterations, "solved", solves)
         res = self._osqp(H, c, lo, hi, x0, None, loose=False)

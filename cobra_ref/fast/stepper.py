@@ -1,9 +1,9 @@
 """The fast stepper: the reference step of :mod:`cobra_ref.step`, with batched parts and warm starts.
 
-Helper (performance): ``FastStepper.step`` takes the same step as :func:`cobra_ref.step.step`,
-block for block, with the same least-action problem and friction loop
-(:func:`cobra_ref.step.least_action_problem`, :func:`cobra_ref.least_action.solve_least_action`);
-only the parts are faster:
+For performance: ``FastStepper.step`` takes the same step as :func:`cobra_ref.step.step`,
+block for block, with the same least-action problem, friction loop and step result
+(:func:`cobra_ref.step.least_action_problem`, :func:`cobra_ref.least_action.solve_least_action`,
+:func:`cobra_ref.step.step_result`); only the parts are faster:
 
 * M, h, poses and Jacobians from the world-frame chain recursion (:mod:`cobra_ref.fast.chain`);
 * the contact search and J_c in batches (:mod:`cobra_ref.fast.contacts`);
@@ -25,11 +25,11 @@ import time
 import numpy as np
 from scipy.linalg import get_lapack_funcs
 
-from ..least_action import kkt_residuals, solve_least_action
+from ..least_action import solve_least_action
 from ..model import Model
 from ..quaternion import quat_exp, quat_mul
-from ..step import (StepResult, StepSettings, _reference, approach_speed, energies, joint_coordinates,
-                    least_action_problem, midpoint_velocity, warm_start, warm_start_memory)
+from ..step import (StepResult, StepSettings, StepSystem, _reference, joint_coordinates, least_action_problem,
+                    midpoint_velocity, servo_start, step_result, warm_start)
 from .chain import ChainModel
 from .contacts import contact_jacobian, find_contacts
 from .least_action import FastBoxQP
@@ -45,26 +45,30 @@ _potrf, _potrs, _trtrs = get_lapack_funcs(("potrf", "potrs", "trtrs"), (np.zeros
 class FastStepper:
     """Advances (q, qd) by one step (module docstring); keeps the warm start between steps."""
 
+    name = "fast"
+
     def __init__(self, model: Model, settings: StepSettings = StepSettings()):
         self.model, self.s = model, settings
         self.chain = ChainModel(model)
         self.joints = joint_coordinates(model)
-        prescribed = settings.servo == "prescribed"
+        servo = settings.joint_servo
         # the free coordinates F and the prescribed P; with none prescribed F selects every row as a
         # view (slice), so the step indexes M, h and J by F without copying them
-        self.free = np.setdiff1d(np.arange(model.nv), self.joints.v) if prescribed else slice(None)
-        self.prescribed = np.setdiff1d(np.arange(model.nv), self.free) if prescribed else np.zeros(0, dtype=int)
-        self.servo_J = np.zeros((0, model.nv)) if prescribed else np.eye(model.nv)[self.joints.v]
+        free = servo.free(model.nv, self.joints)
+        self.free = slice(None) if len(free) == model.nv else free
+        self.prescribed = np.setdiff1d(np.arange(model.nv), free)
+        self.servo_J = servo.jacobian(model.nv, self.joints)
         self.qp = FastBoxQP()
         self.memory = None
         self.reference_end = None  # (reference, t + dt, (q_ref, qd_ref)) of the last step
         self.timing = dict.fromkeys(PHASES, 0.0)
 
-    def reset(self) -> None:
-        """Forget the warm start and the timing (a new run).
+    @property
+    def settings(self) -> StepSettings:
+        return self.s
 
-        Helper: between runs on one stepper.
-        """
+    def reset(self) -> None:
+        """Forget the warm start and the timing: between runs on one stepper."""
         self.memory = self.reference_end = None
         self.timing = dict.fromkeys(PHASES, 0.0)
 
@@ -77,11 +81,8 @@ class FastStepper:
         return _reference(reference, t)[:2]
 
     def step(self, q: np.ndarray, qd: np.ndarray, t: float, reference, tau_ext=None) -> StepResult:
-        """One step from (q, qd) at time t: :func:`cobra_ref.step.step`, faster (module docstring).
-
-        Helper: the stepper that ``simulate`` uses by default.
-        """
-        s, model, dt, F, P = self.s, self.model, self.s.dt, self.free, self.prescribed
+        """One step from (q, qd) at time t: :func:`cobra_ref.step.step`, faster (module docstring)."""
+        s, model, dt, F, P, servo = self.s, self.model, self.s.dt, self.free, self.prescribed, self.s.joint_servo
         clock = [time.perf_counter()]
         tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
         # Steps 1-3: eq. (1) with h at the midpoint velocity, the joints, qd_free over the free coordinates
@@ -89,10 +90,9 @@ class FastStepper:
         M, h = terms.M, terms.h
         qd_next = qd.copy()
         q_ref, qd_ref, _ = _reference(reference, t + dt)  # the joints' reference at the end of the step
-        servo_ref = self._start_reference(reference, t) if s.servo == "position" else None
+        servo_ref = self._start_reference(reference, t) if servo.reads_start else None
         self.reference_end = (reference, t + dt, (q_ref, qd_ref))
-        if s.servo == "prescribed":
-            qd_next[self.joints.v] = (q_ref - q[self.joints.q]) / dt
+        servo.prescribe(qd_next, q, q_ref, self.joints, dt)
         M_F = M[F]
         L = _cholesky(M_F[:, F])
         rhs = dt * (tau_ext - h)[F] - M_F[:, P] @ (qd_next[P] - qd[P])
@@ -105,7 +105,7 @@ class FastStepper:
         B = _trtrs(L, J[:, F].T, lower=1)[0]
         Minv_JT = _trtrs(L, B, lower=1, trans=1)[0]
         G = B.T @ B
-        problem = least_action_problem(model, G, J @ qd_next, contacts, q, qd, servo_ref, s, self.joints)
+        problem = least_action_problem(model, G, J @ qd_next, contacts, s, servo_start(self.joints, q, qd, servo_ref))
         clock.append(time.perf_counter())
         # Step 6: eq. (6); where the certified solves leave the fixed point unconverged (their exact
         # active sets can send Newton's guess elsewhere than OSQP's answers do), the reference step's
@@ -119,18 +119,12 @@ class FastStepper:
                                   qp_iterations=info.qp_iterations + again.qp_iterations,
                                   qp_solves=info.qp_solves + again.qp_solves)
         clock.append(time.perf_counter())
-        # Step 7: velocity, torques, energy ledger, position
-        qd_next[F] += Minv_JT @ x
-        p = x[:3 * contacts.m]
-        if s.servo == "prescribed":
-            tau = (M @ (qd_next - qd) / dt + h - J_c.T @ p / dt - tau_ext)[self.joints.v]
-        else:
-            tau = x[3 * contacts.m:] / dt
-        self.memory = warm_start_memory(contacts, x, qd)
+        # Step 7: velocity, torques, energy ledger, position (the reference step's step_result)
         potential = float(-self.chain.mass @ (terms.com @ model.gravity))
-        result = StepResult(self._integrate(q, qd_next), qd_next, tau, contacts, p, J_c @ qd_next, info,
-                            kkt_residuals(problem, x), approach_speed(J_c, qd), np.diag(G)[:3 * contacts.m:3],
-                            *energies(model, qd, qd_next, M, contacts, J_c, p, tau, potential, s, self.joints), q_ref, self.memory)
+        system = StepSystem(q, qd, M, h, tau_ext, qd_next, F, Minv_JT, contacts, J_c, G, problem, self.joints, q_ref,
+                            potential)
+        result = step_result(model, system, x, info, s, self._integrate)
+        self.memory = result.memory
         clock.append(time.perf_counter())
         for phase, t0, t1 in zip(PHASES, clock[:-1], clock[1:]):
             self.timing[phase] += t1 - t0
