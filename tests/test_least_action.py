@@ -262,13 +262,15 @@ def test_the_fast_box_qp_gives_the_same_least_action_answer_as_osqp(rng):
         np.testing.assert_allclose(answer, reference, atol=1e-5 * max(np.abs(reference).max(), 1e-12) + 10 * EPS)
 
 
-def test_a_cycling_friction_fixed_point_converges_once_its_guesses_are_averaged(monkeypatch):
+def test_a_cycling_friction_fixed_point_converges_once_its_guesses_are_averaged():
     """One step of the reliability sweep (scenario 77: J-mirror, prescribed joints, mu = 1.38,
     17 contacts; stored in tests/data/cycling_step.npz) on which the plain update alternates
     between two guesses of the normal impulses (residuals 0.48 and 0.61) and Newton's method fails
     on both. From iterate FP_RELAX_AFTER on, the loop averages each new guess with the last one:
-    it converges, and the answer meets Coulomb's law (the natural residual of kkt_residuals
-    below 1e-5). Without the averaging (FP_RELAX_AFTER beyond FP_MAX) it does not converge."""
+    it converges within FP_MAX, and the answer meets Coulomb's law (the natural residual of
+    kkt_residuals below 1e-5). What the plain update does instead is not asserted: whether an
+    unstable iteration cycles for ever or escapes its cycle late depends on the last bits of the
+    library arithmetic (on one machine it cycles, on another it escapes at iterate 45)."""
     from pathlib import Path
 
     from cobra_ref import least_action
@@ -278,18 +280,16 @@ def test_a_cycling_friction_fixed_point_converges_once_its_guesses_are_averaged(
     x, info = solve_least_action(problem, data["x0"])
     assert info.converged and least_action.FP_RELAX_AFTER < info.iterations <= least_action.FP_MAX, info
     assert kkt_residuals(problem, x)["coulomb_residual"] < 1e-5
-    monkeypatch.setattr(least_action, "FP_RELAX_AFTER", least_action.FP_MAX + 1)
-    _, info = solve_least_action(problem, data["x0"])
-    assert not info.converged and info.residual > 0.1, info
 
 
-def test_a_fixed_point_whose_friction_directions_cycle_converges_once_they_are_averaged_too(monkeypatch):
+def test_a_fixed_point_whose_friction_directions_cycle_converges_once_they_are_averaged_too():
     """One step of the reliability sweep (scenario 42: S, position servo, a 0.11 kg box pressed
     against the ground by two links, mu = 1.38, 17 contacts; tests/data/wedge_two_cycle_step.npz).
     Averaging the normal impulses alone does not stop its cycle: the guesses alternate with
     residuals 0.152 and 0.161 (measured for 1000 iterates). Averaging each friction direction
     with the last one as well (``mean_angle``), it converges within FP_MAX and the answer meets
-    Coulomb's law (kkt_residuals' natural residual below 1e-5)."""
+    Coulomb's law (kkt_residuals' natural residual below 1e-5). That the normal impulses averaged
+    alone keep cycling is measured, not asserted: an unstable path's fate depends on the last bits."""
     from pathlib import Path
 
     from cobra_ref import least_action
@@ -301,9 +301,6 @@ def test_a_fixed_point_whose_friction_directions_cycle_converges_once_they_are_a
     x, info = solve_least_action(problem, data["x0"])
     assert info.converged and least_action.FP_RELAX_AFTER < info.iterations <= least_action.FP_MAX, info
     assert kkt_residuals(problem, x)["coulomb_residual"] < 1e-5
-    monkeypatch.setattr(least_action, "mean_angle", lambda a, b: b)  # the normal impulses averaged alone
-    _, info = solve_least_action(problem, data["x0"], max_iter=200)
-    assert not info.converged and info.residual > 0.1, info
 
 
 def test_a_step_whose_contacts_all_hover_converges_at_its_first_iterate(monkeypatch):
