@@ -22,7 +22,8 @@ PHYSICS_MODULES = (
     "dynamics.py", "gaps.py", "contact.py", "compliance.py", "qp.py", "least_action.py", "coulomb_newton.py",
     "step.py", "steppers.py", "start.py", "placement.py", "simulate.py", "gaits.py", "reference.py",
     "trajectory.py",
-    "fast/chain.py", "fast/contacts.py", "fast/least_action.py", "fast/active_set.py", "fast/stepper.py",
+    "fast/chain.py", "fast/contacts.py", "fast/gaps.py", "fast/least_action.py", "fast/active_set.py",
+    "fast/stepper.py",
 )
 # ... and the optimizer's cost and rollout
 PLANNING_MODULES = ("planning/cost.py", "planning/problem.py")

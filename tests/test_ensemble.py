@@ -12,7 +12,7 @@ import pytest
 from cobra_ref.infra.executors import SerialExecutor
 from cobra_ref.gaits import gait
 from cobra_ref.robots import cobra_model
-from cobra_ref.start import placed_state
+from cobra_ref.start import BoxPlacement, placed_state
 from cobra_ref.reproduce import check, ensemble, regenerate
 from cobra_ref.reproduce.ensemble import Member, members
 from cobra_ref.reproduce.runs import RunSpec, run_all
@@ -65,7 +65,7 @@ def test_box_shift_and_box_turn_move_the_placed_box_by_exactly_that_much():
     """The shift is added to the placed centre and the turn to its yaw; the robot does not move."""
     model, ref = cobra_model(), gait("J")
     q_nominal = placed_state(model, ref)
-    q = placed_state(model, ref, box_shift=(0.004, -0.003), box_turn=math.radians(1.5))
+    q = placed_state(model, ref, BoxPlacement(shift=(0.004, -0.003), turn=math.radians(1.5)))
     (c0, yaw0), (c1, yaw1) = _box(model, q_nominal), _box(model, q)
     assert np.allclose(c1 - c0, [0.004, -0.003], atol=1e-12)
     assert yaw1 - yaw0 == pytest.approx(math.radians(1.5), abs=1e-12)
@@ -73,15 +73,15 @@ def test_box_shift_and_box_turn_move_the_placed_box_by_exactly_that_much():
     robot = np.ones(model.nq, bool)
     robot[iq] = False
     assert np.array_equal(q[robot], q_nominal[robot])
-    assert np.array_equal(placed_state(model, ref, box_shift=None, box_turn=0.0), q_nominal)
+    assert np.array_equal(placed_state(model, ref, BoxPlacement(shift=None, turn=0.0)), q_nominal)
 
 
-@pytest.mark.parametrize("kwargs, message", [({"box_shift": (0.01,)}, "box_shift must be two finite numbers"),
-                                             ({"box_shift": (np.nan, 0.0)}, "box_shift must be two finite numbers"),
-                                             ({"box_turn": np.inf}, "box_turn must be a finite angle")])
+@pytest.mark.parametrize("kwargs, message", [({"shift": (0.01,)}, "box_shift must be two finite numbers"),
+                                             ({"shift": (np.nan, 0.0)}, "box_shift must be two finite numbers"),
+                                             ({"turn": np.inf}, "box_turn must be a finite angle")])
 def test_a_bad_perturbation_is_refused_naming_it(kwargs, message):
     with pytest.raises(ValueError, match=message):
-        placed_state(cobra_model(), gait("C"), **kwargs)
+        placed_state(cobra_model(), gait("C"), BoxPlacement(**kwargs))
 
 
 # ------------------------------------------------------------------------------------ the run specs

@@ -19,7 +19,7 @@ from cobra_ref.gaits import gait
 from cobra_ref.reproduce import mujoco_check as mc
 from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import simulate
-from cobra_ref.start import initial_state
+from cobra_ref.start import BoxPlacement, initial_state
 from cobra_ref.step import StepSettings
 
 mujoco = pytest.importorskip("mujoco", reason="the MuJoCo comparison needs the optional dependency mujoco")
@@ -117,7 +117,7 @@ def test_c_box_ensembles_overlap(cobra):
     members = []
     for gap, mu_scale in ((0.003, 1.0), (0.005, 1.0), (0.007, 0.8)):
         model = mc.scaled_friction(cobra, mu_scale)
-        q0, qd0 = initial_state(model, reference, box_gap=gap)
+        q0, qd0 = initial_state(model, reference, placement=BoxPlacement(gap=gap))
         traj = simulate(model, reference, duration, q0=q0, qd0=qd0)
         members.append({"reference": reference, "q0": q0, "qd0": qd0, "mu_scale": mu_scale,
                         "ours": traj.box_pose[-1, :2] - traj.box_pose[0, :2]})

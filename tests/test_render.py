@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from cobra_ref.cli import main
-from cobra_ref.viz import render, scene, view
+from cobra_ref.viz import encode, render, scene, view
 
 W, H = 320, 240
+VIDEO = render.VideoSettings(fps=30, width=W, height=H)
 
 
 @pytest.fixture(scope="module")
@@ -67,7 +68,7 @@ def test_png_still_shows_the_robot_and_the_box(run, gl, tmp_path):
 
     path, traj = run
     out = tmp_path / "still.png"
-    info = render.render_file(traj, str(out), width=W, height=H, at=0.1)
+    info = render.render_file(traj, str(out), VIDEO, at=0.1)
     assert info["renderer"] == "mujoco" and info["gl"] == gl["gl"] and info["frames"] == 1
     image = np.asarray(Image.open(out).convert("RGB"))
     assert_not_blank(image)
@@ -88,7 +89,7 @@ def test_gif_plays_the_run_in_real_time_with_robot_and_box_in_frame(run, gl, tmp
 
     path, traj = run
     out = tmp_path / "run.gif"
-    info = render.render_file(traj, str(out), fps=30, width=W, height=H)
+    info = render.render_file(traj, str(out), VIDEO)
     assert info["renderer"] == "mujoco" and info["frames"] == 7  # t = 0, 1/30, ..., 6/30 <= 0.2 s
     gif = Image.open(out)
     assert gif.n_frames == 7
@@ -113,7 +114,7 @@ def test_mp4_holds_every_frame(run, gl, tmp_path):
 
     path, traj = run
     out = tmp_path / "run.mp4"
-    info = render.render_file(traj, str(out), fps=30, width=W, height=H)
+    info = render.render_file(traj, str(out), VIDEO)
     assert info["frames"] == 7
     with imageio.get_reader(str(out)) as reader:
         assert reader.count_frames() == 7
@@ -121,10 +122,10 @@ def test_mp4_holds_every_frame(run, gl, tmp_path):
 
 
 def test_gif_delays_are_whole_centiseconds_that_keep_real_time():
-    d = render.gif_durations(30, 30.0)
+    d = encode.gif_durations(30, 30.0)
     assert all(x % 10 == 0 for x in d) and set(d) == {30, 40}
     assert sum(d) == 1000  # 30 frames at 30 fps = 1 s exactly
-    assert render.gif_durations(4, 25.0) == [40, 40, 40, 40]
+    assert encode.gif_durations(4, 25.0) == [40, 40, 40, 40]
 
 
 def test_frame_times_and_nearest_states(run):
@@ -141,11 +142,11 @@ def test_matplotlib_fallback_without_an_opengl_backend(run, tmp_path, monkeypatc
     path, traj = run
     monkeypatch.setattr(render, "choose_gl", lambda refresh=False: {"gl": None, "process": None,
                                                                       "tried": {"egl": "no EGL here (test)"}})
-    info = render.render_file(traj, str(tmp_path / "still.png"), width=W, height=H, at=0.05)
+    info = render.render_file(traj, str(tmp_path / "still.png"), VIDEO, at=0.05)
     assert info["renderer"] == "matplotlib" and "no EGL here (test)" in info["fallback_reason"]
     assert_not_blank(np.asarray(Image.open(tmp_path / "still.png").convert("RGB")))
     with pytest.raises(render.RenderError, match="no OpenGL backend"):
-        render.render_file(traj, str(tmp_path / "x.png"), width=W, height=H, renderer="mujoco")
+        render.render_file(traj, str(tmp_path / "x.png"), VIDEO, renderer="mujoco")
 
 
 def test_a_child_process_renders_the_same_image(run, gl, tmp_path, monkeypatch):
@@ -154,9 +155,9 @@ def test_a_child_process_renders_the_same_image(run, gl, tmp_path, monkeypatch):
     from PIL import Image
 
     path, traj = run
-    here = render.render_file(traj, str(tmp_path / "here.png"), width=W, height=H, at=0.15)
+    here = render.render_file(traj, str(tmp_path / "here.png"), VIDEO, at=0.15)
     monkeypatch.setattr(render, "choose_gl", lambda refresh=False: {**gl, "process": "child"})
-    child = render.render_file(traj, str(tmp_path / "child.png"), width=W, height=H, at=0.15)
+    child = render.render_file(traj, str(tmp_path / "child.png"), VIDEO, at=0.15)
     assert child["process"] == "child" and child["camera"] == here["camera"]  # the same run, read back exactly
     a, b = (np.asarray(Image.open(tmp_path / f"{n}.png").convert("RGB")).astype(int) for n in ("here", "child"))
     assert np.abs(a - b).max() <= 1
@@ -164,7 +165,7 @@ def test_a_child_process_renders_the_same_image(run, gl, tmp_path, monkeypatch):
 
 def test_render_gif_says_which_renderer_it_used(run, gl, tmp_path):
     path, traj = run
-    info = render.render_gif(traj, str(tmp_path / "anim.gif"), fps=10, width=W, height=H)
+    info = render.render_gif(traj, str(tmp_path / "anim.gif"), render.VideoSettings(fps=10, width=W, height=H))
     assert info["renderer"] == "mujoco" and info["frames"] == 3 and info["bytes"] > 0
     with pytest.raises(render.RenderError, match="writes a .gif"):
         render.render_gif(traj, str(tmp_path / "anim.mp4"))

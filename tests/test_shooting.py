@@ -25,10 +25,11 @@ from cobra_ref.planning.results import params_reference
 GOAL = (0.05, -0.01)
 
 
-def tiny_problem(**kw):
-    args = dict(duration=0.3, ramp_time=0.1, box_gap=0.005, decision=("frequency",),
-                bounds={"frequency": (0.5, 1.5)})
-    return sh.make_problem("C", kw.pop("goal", GOAL), **{**args, **kw})
+def tiny_problem(goal=GOAL, names=("frequency",), bounds=None, settings=None, **kw):
+    """C over 0.3 s with the box 5 mm away, its frequency in [0.5, 1.5] Hz (or ``names`` in ``bounds``)."""
+    space = sh.DecisionSpace(names=names, bounds={"frequency": (0.5, 1.5)} if bounds is None else bounds,
+                             ramp_time=0.1)
+    return sh.make_problem("C", goal, 0.3, settings, space, box_gap=0.005, **kw)
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +40,7 @@ def problem():
 @pytest.fixture(scope="module")
 def serial_result(problem):
     """One compass poll (step 0.5 of the range: the poll point is 1 Hz), serially: 2 rollouts."""
-    return sh.optimize(problem, maxiter=1, step=0.5, executor=sh.SerialExecutor())
+    return sh.optimize(problem, sh.SearchOptions(maxiter=1, step=0.5), executor=sh.SerialExecutor())
 
 
 @pytest.fixture(scope="module")
@@ -85,7 +86,7 @@ def test_optimum_meets_the_contact_conditions_and_reports_the_limits(serial_resu
     """Every step of the optimum solved eq. (6): p_N w_N ~ 0 (f_ext orthogonal to the gap rates) and
     p inside the friction cone. Joint limits hold by construction (prescribed joints, A <= q_max);
     the torque limit is exceeded only in the few impact steps, and the penalty counts exactly those."""
-    c = problem.cobra_parameters()
+    c = problem.cobra
     report = serial_result.best["contact"]
     assert report["max_complementarity"] < 1e-2, report  # [N s m/s]; impulses ~1e-2 N s, speeds ~0.1 m/s
     assert report["max_cone_residual"] < 1e-6, report
@@ -102,7 +103,7 @@ def test_optimum_meets_the_contact_conditions_and_reports_the_limits(serial_resu
 def test_serial_executor_and_process_pool_give_the_same_result(serial_result, problem):
     """The rollouts are deterministic and each batch is collected in order: any executor, same result."""
     with ProcessPoolExecutor(2) as pool:
-        pooled = sh.optimize(problem, maxiter=1, step=0.5, executor=pool)
+        pooled = sh.optimize(problem, sh.SearchOptions(maxiter=1, step=0.5), executor=pool)
     keys = ("params", "cost", "box_distance_to_goal", "terms", "box_final")
     assert [{k: e[k] for k in keys} for e in pooled.history] == \
            [{k: e[k] for k in keys} for e in serial_result.history]
@@ -121,7 +122,7 @@ def test_ctrl_c_keeps_the_best_rollout_found_so_far(problem, tmp_path):
                 raise KeyboardInterrupt
             return super().submit(fn, *args, **kwargs)
 
-    result = sh.optimize(problem, maxiter=3, executor=InterruptSecondBatch())
+    result = sh.optimize(problem, sh.SearchOptions(maxiter=3), executor=InterruptSecondBatch())
     assert result.interrupted and len(result.history) == 1
     record = sh.write_result(result, str(tmp_path / "p.json"))
     assert record["interrupted"] is True and record["params"]["frequency"] == 0.5
@@ -291,9 +292,9 @@ def test_the_companion_search_keeps_the_optimum_from_having_more_impacts_than_th
 
     problem = dataclasses.replace(problem, weights=Weights(impact=10.0))  # the weight the landscape is made for
     monkeypatch.setattr(search, "evaluate", made_up)
-    alone = sh.optimize(problem, maxiter=6, executor=sh.SerialExecutor(), companion=False)
+    alone = sh.optimize(problem, sh.SearchOptions(maxiter=6, companion=False), executor=sh.SerialExecutor())
     assert alone.best["params"]["frequency"] == 0.5 and alone.best["terms"]["impact"] == 0.05
-    result = sh.optimize(problem, maxiter=6, executor=sh.SerialExecutor())
+    result = sh.optimize(problem, sh.SearchOptions(maxiter=6), executor=sh.SerialExecutor())
     assert result.best["params"]["frequency"] == pytest.approx(1.5) and result.best["terms"]["impact"] == pytest.approx(0.04)
     assert result.best["cost"] == min(e["cost"] for e in result.history)
     record = sh.results.impact_comparison(result)
@@ -321,7 +322,7 @@ def test_the_optimums_impacts_are_at_most_the_unpenalized_optimums_on_any_landsc
                     "terms": {"impact": I}, "contact": {"impact_impulse": I * problem.duration}}
 
         monkeypatch.setattr(search, "evaluate", made_up)
-        record = sh.results.impact_comparison(sh.optimize(problem, maxiter=8, executor=sh.SerialExecutor()))
+        record = sh.results.impact_comparison(sh.optimize(problem, sh.SearchOptions(maxiter=8), executor=sh.SerialExecutor()))
         assert record["optimum"]["impact_impulse_per_s"] <= record["without_impact_term"]["impact_impulse_per_s"]
         assert record["lower"] or record["same"]
 
@@ -402,7 +403,7 @@ def test_bounds_that_exclude_the_initial_guess_are_a_clear_error():
     with pytest.raises(sh.ShootingError, match="lo < hi"):
         tiny_problem(bounds={"frequency": (1.0, 0.6)})
     with pytest.raises(sh.ShootingError, match="amplitude"):  # beyond q_max = pi/2: the gait rejects it
-        tiny_problem(decision=("amplitude",), bounds={"amplitude": (0.3, 2.0)})
+        tiny_problem(names=("amplitude",), bounds={"amplitude": (0.3, 2.0)})
     with pytest.raises(sh.ShootingError, match="unknown gait"):
         sh.make_problem("walking", GOAL)
 
@@ -487,7 +488,7 @@ def test_optimization_figure_draws_the_recorded_box_path_and_replays_only_a_json
     import shutil
 
     from cobra_ref.planning.cost import BOX_PATH_DT
-    from cobra_ref.reproduce import regenerate
+    from cobra_ref.reproduce import optima
 
     directory, out, cache = tmp_path / "optimized", tmp_path / "out", tmp_path / "cache"
     directory.mkdir()
@@ -505,12 +506,12 @@ def test_optimization_figure_draws_the_recorded_box_path_and_replays_only_a_json
     def no_simulation(*args, **kw):
         raise AssertionError("replayed although the JSON holds the path (or the cache does)")
 
-    monkeypatch.setattr(sh, "replay", no_simulation)
-    files = regenerate._optimization_figures(str(directory), ["C"], str(out), str(cache), False)
+    monkeypatch.setattr("cobra_ref.planning.results.replay", no_simulation)
+    files = optima.optimization_figures(str(directory), ["C"], str(out), str(cache), False)
     assert sorted(os.path.basename(f) for f in files) == ["fig_optimization.pdf", "fig_optimization.png"]
     with open(out / "fig_optimization.png", "rb") as f:
         assert f.read(4) == b"\x89PNG"
-    assert regenerate._replays_submit(None, str(directory), ["C"], str(cache)) == []
+    assert optima.replays_submit(None, str(directory), ["C"], str(cache)) == []
     # a JSON without the path: replayed once (the executor gets it), then from the cache
     old = json.loads(params_file.read_text())
     del old["box_path"]
@@ -518,11 +519,11 @@ def test_optimization_figure_draws_the_recorded_box_path_and_replays_only_a_json
     monkeypatch.undo()
     from cobra_ref.infra.executors import SerialExecutor
 
-    futures = regenerate._replays_submit(SerialExecutor(), str(directory), ["C"], str(cache))
+    futures = optima.replays_submit(SerialExecutor(), str(directory), ["C"], str(cache))
     assert len(futures) == 1
     np.testing.assert_array_equal(futures[0].result(), replayed.box_pose[:, :2])
-    monkeypatch.setattr(sh, "replay", no_simulation)
-    regenerate._optimization_figures(str(directory), ["C"], str(out), str(cache), False)
+    monkeypatch.setattr("cobra_ref.planning.results.replay", no_simulation)
+    optima.optimization_figures(str(directory), ["C"], str(out), str(cache), False)
 
 
 def test_with_the_position_servo_the_optimum_respects_the_torque_and_joint_limits_at_every_step(problem, serial_result):
@@ -530,15 +531,15 @@ def test_with_the_position_servo_the_optimum_respects_the_torque_and_joint_limit
     bounded by tau_max dt in the least-action QP, so no step of any rollout exceeds tau_max
     (tau_excess <= 0), and the joints stay inside q_max; the servo and the contact law are kept
     in the params JSON, and an unknown servo is refused."""
-    assert problem.settings().servo == "position" and problem.settings().contact == "compliant"
+    assert problem.settings.servo == "position" and problem.settings.contact == "compliant"
     traj = sh.rollout(problem, [serial_result.best["params"]["frequency"]])
     assert np.all(traj.steps["tau_excess"] <= 1e-12), traj.steps["tau_excess"].max()
     assert np.all(traj.steps["q_excess"] <= 0.0), traj.steps["q_excess"].max()
     assert serial_result.best["terms"]["tau_limit"] == 0.0 and serial_result.best["terms"]["q_limit"] == 0.0
     again = sh.problem_from_dict(sh.problem_to_dict(problem))
-    assert (again.servo, again.contact) == ("position", "compliant")
-    with pytest.raises(sh.ShootingError, match="servo must be"):
-        tiny_problem(servo="stiff")
+    assert again == problem and (again.settings.servo, again.settings.contact) == ("position", "compliant")
+    with pytest.raises(sh.ShootingError, match="settings must be a StepSettings"):
+        tiny_problem(settings="stiff")
 
 
 def test_figures_reoptimize_writes_one_params_json_per_gait_and_direction(tmp_path, monkeypatch):
@@ -547,7 +548,7 @@ def test_figures_reoptimize_writes_one_params_json_per_gait_and_direction(tmp_pa
     from cobra_ref.reproduce import regenerate
 
     monkeypatch.setattr("cobra_ref.planning.search.DEFAULTS", {"C": (GOAL, 0.3, 1)})
-    monkeypatch.setattr(regenerate, "DIRECTIONS", {"right": ("C", (0.05, -0.02))})
+    monkeypatch.setattr("cobra_ref.reproduce.optima.DIRECTIONS", {"right": ("C", (0.05, -0.02))})
     files = regenerate.reoptimize(str(tmp_path), gaits=("C",), progress=False)
     assert sorted(files) == ["C", "direction-right"]
     for path in files.values():
@@ -565,7 +566,7 @@ def test_candidates_with_the_same_start_shape_share_one_settle_bit_for_bit(monke
     of amplitude changes the shape and settles again. The copies it returns are the caller's own."""
     from cobra_ref.planning import problem as problem_module
 
-    problem = tiny_problem(decision=("amplitude", "frequency"), bounds={"amplitude": (0.25, 0.75), "frequency": (0.5, 1.5)})
+    problem = tiny_problem(names=("amplitude", "frequency"), bounds={"amplitude": (0.25, 0.75), "frequency": (0.5, 1.5)})
     x = np.asarray(problem.x0, dtype=float)
     faster = x.copy()
     faster[list(problem.names).index("frequency")] += 0.1

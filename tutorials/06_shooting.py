@@ -160,10 +160,10 @@ fig.savefig(OUT / "06_shooting_landscape.png", dpi=120)
 # For a rollout that runs in seconds we take a 0.3 s horizon with the box 5 mm from the middle link.
 
 # %%
-problem = sh.make_problem("C", goal=(0.05, -0.01), duration=0.3, ramp_time=0.1, box_gap=0.005)
+problem = sh.make_problem("C", goal=(0.05, -0.01), duration=0.3, space=sh.DecisionSpace(ramp_time=0.1), box_gap=0.005)
 print("decision:", problem.names, "lower", problem.lower, "upper", problem.upper, "x0", problem.x0)
 print("box starts at", np.round(problem.box_pose0[:2], 4), "goal", np.round(problem.goal_world, 4))
-model = cobra_model(problem.cobra_parameters())
+model = cobra_model(problem.cobra)
 starts = {A: sh.start_state(problem, (A, 0.5), model)[0] for A in (0.5, 0.7)}
 for A, q0 in starts.items():
     print(f"A = {A}: middle pose (x, y, heading) = {sh.middle_pose(model, q0)}")

@@ -7,12 +7,12 @@ run on any executor), ``results`` (the params JSON and its replay).
 
 from ..infra.executors import SerialExecutor
 from .cost import evaluate, shooting_cost
-from .problem import (DECISION, DEFAULTS, ShootingError, ShootingProblem, make_problem, middle_pose, rollout,
-                      start_state)
+from .problem import (DECISION, DEFAULTS, DecisionSpace, ShootingError, ShootingProblem, Weights, make_problem,
+                      middle_pose, rollout, start_state)
 from .results import load_result, problem_from_dict, problem_to_dict, replay, write_result
-from .search import compass_search, differential_evolution_search, optimize, optimize_gait
+from .search import SearchOptions, compass_search, differential_evolution_search, optimize, optimize_gait
 
-__all__ = ["DECISION", "DEFAULTS", "SerialExecutor", "ShootingError", "ShootingProblem", "compass_search",
-           "differential_evolution_search", "evaluate", "load_result", "make_problem", "middle_pose", "optimize",
-           "optimize_gait", "problem_from_dict", "problem_to_dict", "replay", "rollout", "shooting_cost",
-           "start_state", "write_result"]
+__all__ = ["DECISION", "DEFAULTS", "DecisionSpace", "SearchOptions", "SerialExecutor", "ShootingError",
+           "ShootingProblem", "Weights", "compass_search", "differential_evolution_search", "evaluate", "load_result",
+           "make_problem", "middle_pose", "optimize", "optimize_gait", "problem_from_dict", "problem_to_dict",
+           "replay", "rollout", "shooting_cost", "start_state", "write_result"]

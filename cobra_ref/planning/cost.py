@@ -48,7 +48,7 @@ def shooting_cost(problem: ShootingProblem, traj: Trajectory) -> dict:
 
         J = w_e E + w_g (d_T / d_0)^2 + w_I I + w_tau P_tau + w_q P_q
     """
-    cp, w, T, dt = problem.cobra_parameters(), problem.weights, problem.duration, traj.dt
+    cp, w, T, dt = problem.cobra, problem.weights, problem.duration, traj.dt
     # E = integral ||tau||^2 dt / (n tau_max^2 T)
     effort = dt * float(np.sum(traj.tau**2)) / (traj.tau.shape[1] * cp.tau_max**2 * T)
     # d_T = |p_box(T) - p_goal|, d_0 = |goal|
@@ -92,9 +92,8 @@ def evaluate(problem: ShootingProblem, x) -> dict:
     """One rollout's history entry: params, cost, box_distance_to_goal, the cost terms, the final
     box position, the contact and limit report, and the error if the simulation failed; and
     ``box_path``, the box's (x, y) every ``BOX_PATH_DT`` and at the end ((n, 2) array), which the
-    params JSON keeps for the optimum only (``results.result_to_dict``).
-
-    Helper: what the executor runs (a module-level function: picklable for a process pool).
+    params JSON keeps for the optimum only (``results.result_to_dict``). What the executor runs (a
+    module-level function: picklable for a process pool).
     """
     entry = {"params": {n: float(v) for n, v in zip(problem.names, x)}, "error": None}
     try:
@@ -111,5 +110,12 @@ def evaluate(problem: ShootingProblem, x) -> dict:
         every = max(1, int(round(BOX_PATH_DT / problem.dt)))
         rows = np.unique(np.append(np.arange(0, len(traj.box_pose), every), len(traj.box_pose) - 1))
         entry["box_path"] = traj.box_pose[rows, :2].copy()
-        entry["contact"] = contact_report(traj, problem.cobra_parameters().tau_max)
+        entry["contact"] = contact_report(traj, problem.cobra.tau_max)
     return entry
+
+
+def cost_without_impact(problem: ShootingProblem, entry: dict) -> float:
+    """J - w_I I of a history entry (a failed rollout keeps its J): the cost the companion search
+    of ``search.optimize`` minimizes."""
+    terms = entry.get("terms")
+    return entry["cost"] if terms is None else entry["cost"] - problem.weights.impact * terms["impact"]

@@ -5,12 +5,13 @@ minimized joint torques tau such that generalized contact forces f_ext stand ort
 functions and their derivative" and "the goal is to move the box on the flat ground towards a
 specified point" (Eq. (6) constraints (2), (3) as penalties).
 
-The model every rollout runs (``ShootingProblem.contact``, ``.servo``, ``.dt``; the figures' model):
-the compliant contact law (spring-damper normal contact and smooth stick-slip friction,
-assumptions A12, A13), the position servo (each joint driven towards its reference, its torque
-clamped at tau_max = 9.2 N m, ``compliance.servo_rows``) and dt = 1 ms (A14). ``make_problem``
-also accepts the rigid law and the prescribed servo (``servo="prescribed"``: the joints follow the
-reference exactly and the torques are recovered, unbounded).
+The model every rollout runs (``ShootingProblem.settings``, a ``StepSettings``, and
+``ShootingProblem.cobra``, a ``CobraParameters``; by default the figures' model): the compliant
+contact law (spring-damper normal contact and smooth stick-slip friction, assumptions A12, A13),
+the position servo (each joint driven towards its reference, its torque clamped at tau_max =
+9.2 N m, ``compliance.servo_rows``) and dt = ``DEFAULT_DT`` (A14). ``make_problem`` also accepts
+the rigid law and the prescribed servo (``StepSettings(servo="prescribed")``: the joints follow
+the reference exactly and the torques are recovered, unbounded).
 
 The problem (``ShootingProblem``)::
 
@@ -46,10 +47,10 @@ Decision vectors (``DECISION``; phase phi_0 and the ramp are fixed, see below):
 The initial guess is the gait's default (assumption A10), with phi_0 = 0 (the planar start shape).
 Left out on purpose: the rolling phase phi_0 (a nonzero phi_0 starts from a twisted shape that
 ``initial_state`` turns onto its flattest side, so it mostly starts the same roll at another point
-of the cycle; not measured), sidewinding's spatial frequency and delta (they change the shape and
-the direction of travel). Sidewinding's bounds are narrow because its direction of travel also
-depends on amplitude and frequency (measured: at 1 Hz the robot travels 2.5 m in 3 s and misses
-the box placed for 0.5 Hz), and the box is placed once, for the initial guess.
+of the cycle), sidewinding's spatial frequency and delta (they change the shape and the direction
+of travel). Sidewinding's bounds are narrow because its direction of travel also depends on
+amplitude and frequency (docs/results.md, "Planner"), and the box is placed once, for the initial
+guess.
 The frequency stays <= 1 Hz so that the joint speed A omega <= 0.75 * 2 pi = 4.7 rad/s stays
 near the servo's 3.77 rad/s (not penalised: the servo speed is not a constraint of Eq. (6)).
 The phase-rate ramp is shortened to ``RAMP_TIME`` = 0.25 s (the gaits' default, one period,
@@ -72,17 +73,18 @@ rolling at 1 Hz, rolls a link's circumference 2 pi r = 0.34 m per period) or tha
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..gaits import GaitError, gait, gait_params
+from ..infra.validation import DEFAULT_DT
 from ..kinematics import forward_kinematics
 from ..params import CobraParameters
 from ..quaternion import quat_mul
 from ..robots import cobra_model
 from ..simulate import simulate
-from ..start import initial_state
+from ..start import BoxPlacement, initial_state
 from ..step import SimulationError, StepSettings
 from ..trajectory import Trajectory
 
@@ -96,12 +98,9 @@ DECISION = {  # gait -> ((parameter, lower, upper), ...)  (module docstring)
 }
 # gait -> (goal (dx, dy) [m], horizon T [s], maxiter) of ``optimize_gait`` and ``cobra-ref optimize``:
 # the goal is about 1.5 times as far as the initial guess pushes the box in T, in the direction it pushes
-# it, rounded to 1 cm (measured with the compliant contact law and the position servo, dt 1 ms, 1.5 s:
-# C (0.106, -0.020), S (0.073, -0.137), J (0.209, -0.032), J-mirror (0.209, 0.032)).
-# Sidewinding, its box placed ahead of the wave's band (A31): the initial guess does not touch the box
-# in 1.5 s (push (0, 0): no direction to aim at) and pushes it (-0.126, -0.017) in 3 s, hence T = 3 s.
-# maxiter 6 for every gait: the whole ``regenerate.reoptimize`` then fits its 20-minute budget on 2 idle
-# cores (estimated from the measured runs, docs/planning.md "Timings").
+# it, rounded to 1 cm; sidewinding's initial guess (its box ahead of the wave's band, A31) reaches the box
+# only after 1.5 s, hence T = 3 s; maxiter 6 keeps ``regenerate.reoptimize`` within its budget
+# (docs/planning.md, "The goals and horizons" and "Timings").
 DEFAULTS = {"C": ((0.16, -0.03), 1.5, 6), "S": ((0.11, -0.21), 1.5, 6), "J": ((0.31, -0.05), 1.5, 6),
             "J-mirror": ((0.31, 0.05), 1.5, 6), "sidewinding": ((-0.19, -0.02), 3.0, 6)}
 RAMP_TIME = 0.25  # [s] phase-rate ramp of every candidate (module docstring)
@@ -122,21 +121,15 @@ class ShootingError(ValueError):
 class Weights:
     """Weights of the cost terms (module docstring): J = effort E + goal (d_T/d_0)^2 + impacts I + penalties.
 
-    Helper: the defaults make the goal term dominate until the box is within about 10 % of the
-    start distance (10 * 0.1^2 = 0.1; the effort E of the initial guesses is C 0.046, S 0.017,
-    J 0.055); a sustained 10 % torque excess costs as much (P_tau = 0.1). The impact weight
-    w_I = 100 makes an impact impulse rate at claim NI's threshold, 1 % of the robot's weight
-    (I = 0.01: 0.59 N s per second, m_robot g = 58.86 N for COBRA), cost 1, ten times the effort of
-    any initial guess and as much as the goal term with the box a third of its start distance
-    away: the paper states the condition as a constraint ("such that"), and an exact penalty
-    stands for a constraint only when its weight is large enough to decide between points that
-    reach the goal about equally well. w_I = 10 (1 % of the weight costing as much as the goal
-    term at 10 % of the start distance) was measured not to: on six of the eight committed
-    optimizations the optimum was the same rollout as the companion search's without the term
-    (docs/planning.md). Measured on the initial guesses (1.5 s, the compliant contact law and the
-    position servo at dt 1 ms): C I = 0.00064 (3 impacts, 0.037 N s/s), S 0.0020 (9 impacts,
-    0.12 N s/s), J and J-mirror 0.0145 (17 impacts, 0.85 N s/s); over C's first 19 rollouts
-    0.0003-0.0026; sidewinding (3 s, its box ahead of the wave) 0.049 (63 impacts, 2.87 N s/s).
+    The goal term dominates until the box is within about 10 % of the start distance
+    (10 * 0.1^2 = 0.1, the size of the initial guesses' effort E); a sustained 10 % torque excess
+    costs as much (P_tau = 0.1). The impact weight w_I = 100 makes an impact impulse rate at claim
+    NI's threshold, 1 % of the robot's weight (I = 0.01), cost 1, ten times the initial guesses'
+    effort and as much as the goal term with the box a third of its start distance away: the paper
+    states the condition as a constraint ("such that"), and an exact penalty stands for a
+    constraint only when its weight is large enough to decide between points that reach the goal
+    about equally well. The initial guesses' terms and the choice of w_I: docs/planning.md, "What
+    the planner minimizes".
     """
 
     effort: float = 1.0
@@ -147,16 +140,27 @@ class Weights:
 
 
 @dataclass(frozen=True)
-class ShootingProblem:
-    """Everything a rollout needs, picklable (plain numbers and tuples): see the module docstring.
+class DecisionSpace:
+    """What ``make_problem`` optimises and from where: ``names`` = the parameters to optimise
+    (default: every bounded one; the other gait parameters stay at the initial guess), ``bounds``
+    = {name: (lo, hi)} replacing or adding to ``DECISION[gait]``, ``x0`` = {name: value}
+    overriding the initial guess (default: the gait's defaults, with phase 0 and ``ramp_time``),
+    ``ramp_time`` [s] = the phase-rate ramp of every candidate."""
 
-    Helper: built by ``make_problem`` (which checks the input) or ``problem_from_dict`` (JSON).
-    """
+    names: tuple | None = None
+    bounds: dict | None = None
+    x0: dict | None = None
+    ramp_time: float = RAMP_TIME
+
+
+@dataclass(frozen=True)
+class ShootingProblem:
+    """Everything a rollout needs, picklable: see the module docstring. Built by ``make_problem``
+    (which checks the input) or ``results.problem_from_dict`` (JSON)."""
 
     gait: str
     goal: tuple  # (dx, dy) [m] from the box's start, world axes
     duration: float
-    dt: float
     names: tuple  # decision parameters
     lower: tuple
     upper: tuple
@@ -166,9 +170,12 @@ class ShootingProblem:
     box_pose0: tuple  # (x, y, z, qw, qx, qy, qz) of the box at t = 0, the same for every rollout
     middle_pose0: tuple  # (x, y, heading) of the robot's middle at t = 0
     box_direction: tuple | None  # sidewinding: the direction the box was placed in
-    cobra: tuple = field(default=())  # ((name, value), ...) of CobraParameters
-    servo: str = "position"  # the joint servo of every rollout (StepSettings.servo)
-    contact: str = "compliant"  # the contact law of every rollout (StepSettings.contact)
+    settings: StepSettings  # time step, contact law and servo of every rollout
+    cobra: CobraParameters  # the robot, the box and the ground of every rollout
+
+    @property
+    def dt(self) -> float:
+        return self.settings.dt
 
     @property
     def goal_world(self) -> np.ndarray:
@@ -181,61 +188,52 @@ class ShootingProblem:
     def reference(self, x):
         return gait(self.gait, **self.params(x))
 
-    def settings(self) -> StepSettings:
-        return StepSettings(dt=self.dt, contact=self.contact, servo=self.servo)
 
-    def cobra_parameters(self) -> CobraParameters:
-        return CobraParameters(**{k: tuple(v) if isinstance(v, list) else v for k, v in self.cobra})
-
-
-def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, dt: float = 1e-3, bounds=None,
-                 x0=None, decision=None, ramp_time: float = RAMP_TIME, weights: Weights = Weights(),
-                 cobra: CobraParameters | None = None, box_gap: float = 0.05,
-                 servo: str = "position", contact: str = "compliant") -> ShootingProblem:
+def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, settings: StepSettings | None = None,
+                 space: DecisionSpace = DecisionSpace(), weights: Weights = Weights(),
+                 cobra: CobraParameters | None = None, box_gap: float = 0.05) -> ShootingProblem:
     """Check the input and build the problem: bounds, initial guess, the common box placement.
 
-    Helper: the input side of the shooting method (module docstring). ``bounds`` = {name: (lo, hi)}
-    replaces or adds bounds (default ``DECISION[gait]``); ``decision`` = the names to optimise
-    (default: every bounded one), the other gait parameters stay at the initial guess;
-    ``x0`` = {name: value} overrides the initial guess (default: the gait's defaults, with
-    phase 0 and ``ramp_time``); ``box_gap`` = the gap between the box and the middle link at the
-    start (``simulate.initial_state``, assumption A9: 5 cm); ``servo`` = "position" (default: the
-    joint torques clamped at tau_max, so the torque limit holds at every step by construction; the
-    joints lag the reference) or "prescribed" (joints follow the reference exactly, torques
-    recovered, any excess above tau_max penalised); ``contact`` = "compliant" (default) or "rigid". Raises ``ShootingError`` for an
-    unknown gait, a goal that is not two finite numbers or is unreachable, bounds that are empty
-    or exclude the initial guess, or values the gait rejects. Sidewinding runs one box-free simulation
+    The input side of the shooting method (module docstring). ``settings``: the rollouts' step
+    settings (default ``StepSettings(dt=DEFAULT_DT)``: the compliant law and the position servo,
+    whose joint torques are clamped at tau_max, so the torque limit holds at every step by
+    construction; with the prescribed servo the joints follow the reference exactly and any
+    torque above tau_max is penalised); ``space``: the decision vector (``DecisionSpace``);
+    ``cobra``: the model's parameters (default ``CobraParameters()``); ``box_gap``: the gap between
+    the box and the middle link at the start (``start.initial_state``, assumption A9: 5 cm).
+    Raises ``ShootingError`` for an unknown gait, settings that are not a StepSettings, a goal
+    that is not two finite numbers or is unreachable, bounds that are empty or exclude the initial
+    guess, or values the gait rejects. Sidewinding runs one box-free simulation
     (``placement.travel_placement``) to place the box.
     """
     if gait_name not in DECISION:
         raise ShootingError(f"unknown gait {gait_name!r}; gaits: {', '.join(DECISION)}")
-    try:
-        StepSettings(dt=dt if np.isfinite(dt) and dt > 0 else 1e-3, servo=servo, contact=contact)
-    except ValueError as exc:
-        raise ShootingError(str(exc)) from None
+    settings = StepSettings(dt=DEFAULT_DT) if settings is None else settings
+    if not isinstance(settings, StepSettings):
+        raise ShootingError(f"settings must be a StepSettings, got {type(settings).__name__}")
+    cobra = CobraParameters() if cobra is None else cobra
+    if not isinstance(cobra, CobraParameters):
+        raise ShootingError(f"cobra must be a CobraParameters, got {type(cobra).__name__}")
     if not (np.isfinite(duration) and duration > 0):
         raise ShootingError(f"duration must be positive and finite, got {duration}")
-    if not (np.isfinite(dt) and 0 < dt <= duration):
-        raise ShootingError(f"dt must be positive, finite and <= duration, got {dt}")
+    if not settings.dt <= duration:
+        raise ShootingError(f"dt must be <= duration, got dt = {settings.dt} and duration = {duration}")
     goal = check_goal(goal, duration)
-    names, lower, upper = _decision(gait_name, bounds, decision)
-    guess = _initial_guess(gait_name, names, lower, upper, x0, ramp_time)
+    names, lower, upper = _decision(gait_name, space.bounds, space.names)
+    guess = _initial_guess(gait_name, names, lower, upper, space.x0, space.ramp_time)
     x_guess = tuple(guess.pop(n) for n in names)
-    cobra = cobra or CobraParameters()
     ref = gait(gait_name, **guess, **dict(zip(names, x_guess)))
     if not (np.isfinite(box_gap) and box_gap >= 0):
         raise ShootingError(f"box_gap must be finite and >= 0, got {box_gap}")
-    box_pose0, middle0, direction = _box_placement(gait_name, ref, duration, dt, cobra, box_gap, servo, contact)
-    return ShootingProblem(gait_name, goal, float(duration), float(dt), names, lower, upper, x_guess,
-                           tuple(sorted(guess.items())), weights, box_pose0, middle0, direction,
-                           tuple(asdict(cobra).items()), servo, contact)
+    box_pose0, middle0, direction = _box_placement(gait_name, ref, settings, cobra, box_gap)
+    return ShootingProblem(gait_name, goal, float(duration), names, lower, upper, x_guess,
+                           tuple(sorted(guess.items())), weights, box_pose0, middle0, direction, settings, cobra)
 
 
 def check_goal(goal, duration: float) -> tuple:
     """The goal as (dx, dy) floats, or a ShootingError: not two finite numbers, closer than 1 mm,
-    or unreachable (farther than MAX_BOX_SPEED * duration or MAX_GOAL_DISTANCE).
-
-    Helper: the goal's input check (module docstring).
+    or unreachable (farther than MAX_BOX_SPEED * duration or MAX_GOAL_DISTANCE): the goal's input
+    check (module docstring).
     """
     try:
         g = np.asarray(goal, dtype=float).reshape(-1)
@@ -295,30 +293,27 @@ def _initial_guess(gait_name, names, lower, upper, x0, ramp_time) -> dict:
     return {k: float(v) for k, v in guess.items()}
 
 
-def _box_placement(gait_name, ref, duration, dt, cobra, box_gap, servo, contact):
+def _box_placement(gait_name: str, ref, settings: StepSettings, cobra: CobraParameters, box_gap: float):
     """The common box pose, the initial guess's middle pose and (sidewinding) the box direction."""
     direction = None
     if gait_name == "sidewinding":
         from ..placement import travel_placement
 
-        settings = StepSettings(dt=dt, servo=servo, contact=contact)
         try:
-            placement = travel_placement(cobra_model(cobra, with_box=False), ref, dt, box_gap, settings)
+            placement = travel_placement(cobra_model(cobra, with_box=False), ref, settings.dt, box_gap, settings)
         except SimulationError as exc:
             raise ShootingError(f"cannot place the box for the initial guess: {exc}") from None
         direction, box_gap = placement.direction, placement.box_gap
     model = cobra_model(cobra)
-    q0, _ = initial_state(model, ref, StepSettings(dt=dt, servo=servo, contact=contact), box_gap=box_gap,
-                          box_direction=direction)
+    q0, _ = initial_state(model, ref, settings, BoxPlacement(gap=box_gap, direction=direction))
     box = model.q_idx[model.boxes[0].body]
     return tuple(float(v) for v in q0[box]), tuple(float(v) for v in middle_pose(model, q0)), direction
 
 
 def middle_pose(model, q) -> np.ndarray:
     """(x, y, heading) of the robot's middle: the midpoint of the centres of mass of its two middle
-    bodies (L5, L6 for COBRA) and the horizontal direction from the second to the first.
-
-    Helper: the anchor of the common initial state (module docstring).
+    bodies (L5, L6 for COBRA) and the horizontal direction from the second to the first: the
+    anchor of the common initial state (module docstring).
     """
     kin = forward_kinematics(model, q)
     robot = [i for i in range(model.nb) if all(b.body != i for b in model.boxes)]
@@ -330,12 +325,11 @@ def middle_pose(model, q) -> np.ndarray:
 
 def start_state(problem: ShootingProblem, x, model=None):
     """(q0, qd0) of the rollout of x: candidate x's start shape at rest, moved in the plane so that
-    its middle is at ``problem.middle_pose0``; the box at ``problem.box_pose0``.
-
-    Helper: the common initial state (module docstring). ``model``: the problem's own
-    (``cobra_model(problem.cobra_parameters())``, built if not given).
+    its middle is at ``problem.middle_pose0``; the box at ``problem.box_pose0`` (the common
+    initial state, module docstring). ``model``: the problem's own (``cobra_model(problem.cobra)``,
+    built if not given).
     """
-    model = model or cobra_model(problem.cobra_parameters())
+    model = model or cobra_model(problem.cobra)
     q0, qd0 = _settled(problem, problem.reference(x), model)
     now, goal = middle_pose(model, q0), np.asarray(problem.middle_pose0)
     # planar rigid motion of the robot: p -> Rz(dpsi) (p - m_now) + m_goal, quat -> q_z(dpsi) * quat
@@ -361,17 +355,17 @@ _SETTLED_MAX = 256
 def _settled(problem: ShootingProblem, reference, model):
     """Copies of ``start.initial_state`` of the reference's t = 0 shape, settled once per process.
 
-    Helper: ``start_state``. The settled start depends on the reference only through its t = 0
+    The settled start depends on the reference only through its t = 0
     joint angles (the shape that is placed and held), so candidates that differ only in
     parameters that leave that shape alone (a compass poll along the frequency) start from the
     same numbers, computed once (bit for bit what a fresh settle gives; tests/test_shooting.py).
     """
     shape = np.asarray(reference(0.0)[0], dtype=float)
-    key = (repr(problem.cobra), problem.dt, problem.servo, problem.contact, problem.box_direction, shape.tobytes())
+    key = (repr(problem.cobra), repr(problem.settings), problem.box_direction, shape.tobytes())
     if key not in _SETTLED:
         if len(_SETTLED) >= _SETTLED_MAX:
             _SETTLED.clear()
-        _SETTLED[key] = initial_state(model, reference, problem.settings(), box_direction=problem.box_direction)
+        _SETTLED[key] = initial_state(model, reference, problem.settings, BoxPlacement(direction=problem.box_direction))
     q0, qd0 = _SETTLED[key]
     return q0.copy(), qd0.copy()
 
@@ -382,6 +376,6 @@ def rollout(problem: ShootingProblem, x, progress=None) -> Trajectory:
     Implements: the "shooting" of [COBRA] sec. "Results": one simulation per u_ref.
     Raises ``SimulationError`` as ``simulate`` does.
     """
-    model = cobra_model(problem.cobra_parameters())
+    model = cobra_model(problem.cobra)
     q0, qd0 = start_state(problem, x, model)
-    return simulate(model, problem.reference(x), problem.duration, problem.settings(), q0, qd0, progress)
+    return simulate(model, problem.reference(x), problem.duration, problem.settings, q0, qd0, progress)

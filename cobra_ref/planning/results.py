@@ -17,110 +17,152 @@ import numpy as np
 from ..infra.output import atomic_write
 from ..provenance import code_version
 from ..gaits import gait
+from ..params import CobraParameters
 from ..robots import cobra_model
+from ..step import SimulationError, StepSettings
 from ..trajectory import Trajectory
-from .cost import BOX_PATH_DT, shooting_cost
-from .problem import DECISION, FORMAT, ShootingError, ShootingProblem, Weights, rollout, start_state
+from .cost import BOX_PATH_DT, cost_without_impact, shooting_cost
+from .problem import DECISION, FORMAT, ShootingError, ShootingProblem, Weights, check_goal, rollout, start_state
 
-CHECK_DT = 5e-4  # [s] the high-fidelity check's step: from 1 to 0.5 ms the box displacement of C and J
-# changes by -1.1 % and -0.5 %, and from 0.5 to 0.25 ms torque and power peaks by < 0.5 %
-# (docs/results.md, "Does a result hold when dt halves?"): 0.5 ms is the converged setting.
+CHECK_DT = 5e-4  # [s] the high-fidelity check's step, the converged setting (docs/results.md, "Does a result
+# hold when dt halves?")
+STEP_SETTINGS_KEYS = ("dt", "contact", "servo", "margin")  # the params JSON's "step_settings"
 TRANSFER_KEYS = ("plan_dt", "check_dt", "plan_distance_to_goal", "check_distance_to_goal",
                  "plan_impact_impulse_per_s", "check_impact_impulse_per_s")
 
 def problem_to_dict(problem: ShootingProblem) -> dict:
-    """The problem as JSON-ready settings (every input of a rollout).
-
-    Helper: the ``settings`` part of the params JSON.
-    """
+    """The problem as JSON-ready settings (every input of a rollout): the ``settings`` part of the
+    params JSON."""
+    s = problem.settings
     return {"gait": problem.gait, "goal": list(problem.goal), "goal_world": [float(v) for v in problem.goal_world],
-            "duration": problem.duration, "dt": problem.dt, "step_settings": asdict(problem.settings()),
+            "duration": problem.duration, "dt": problem.dt,
+            "step_settings": {k: getattr(s, k) for k in STEP_SETTINGS_KEYS},
             "decision": {"names": list(problem.names), "lower": list(problem.lower), "upper": list(problem.upper),
                          "x0": list(problem.x0)},
             "fixed": dict(problem.fixed), "weights": asdict(problem.weights),
             "box_pose0": list(problem.box_pose0), "middle_pose0": list(problem.middle_pose0),
             "box_direction": None if problem.box_direction is None else list(problem.box_direction),
-            "cobra_parameters": {k: list(v) if isinstance(v, tuple) else v for k, v in problem.cobra},
-            "servo": problem.servo, "contact": problem.contact}
+            "cobra_parameters": {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(problem.cobra).items()},
+            "servo": s.servo, "contact": s.contact}
 
 
 def problem_from_dict(d: dict) -> ShootingProblem:
     """The problem back from ``problem_to_dict``'s output; ShootingError if malformed.
 
-    Helper: replay of a params JSON. Every setting is checked by its rule
-    (:mod:`cobra_ref.infra.validation`) and the message names it ("malformed settings in params JSON:
-    settings.<field>: ..."): a missing key, a string where a number belongs, a non-finite number,
-    dt and duration (a time grid of at most ``MAX_STEPS``), the goal (``check_goal``: not at the
-    box's start, reachable), the decision (names, bounds lower < upper, x0 within them), the
-    weights (finite, >= 0), the CobraParameters (each field's rule), servo and contact law.
+    Every setting is checked by its rule (:mod:`cobra_ref.infra.validation`) and the message names
+    it ("malformed settings in params JSON: settings.<field>: ..."): a missing key, a string where a
+    number belongs, a non-finite number, dt and duration (a time grid of at most ``MAX_STEPS``),
+    the goal (``check_goal``: not at the box's start, reachable), the decision (names, bounds
+    lower < upper, x0 within them), the weights (finite, >= 0), the CobraParameters (each field's
+    rule), servo and contact law (``StepSettings``), the gait and its parameters at x0.
     """
-    from ..params import CobraParameters
-    from ..infra.validation import RULES, ValidationError, is_number, time_grid
-    from .problem import check_goal
+    from ..infra.validation import ValidationError
 
-    where = "settings"
+    parts: dict = {}
+    for where, read in _SETTINGS_READERS:
+        try:
+            parts.update(read(d, parts))
+        except KeyError as exc:
+            message = f"missing key {exc}"
+        except (ShootingError, ValidationError) as exc:
+            message = str(exc)
+        except (TypeError, ValueError, AttributeError) as exc:
+            message = f"{type(exc).__name__}: {exc}"
+        else:
+            continue
+        raise ShootingError(f"malformed settings in params JSON: {where}: {message}") from None
+    return parts["problem"]
 
-    def malformed(message: str) -> ShootingError:
-        return ShootingError(f"malformed settings in params JSON: {where}: {message}")
 
-    try:
-        if not isinstance(d, dict):
-            raise TypeError(f"expected an object, got {type(d).__name__}")
-        where = "settings.decision"
-        dec = d["decision"]
-        names = tuple(map(str, dec["names"]))
-        lower, upper, x0 = (_floats(dec[k], len(names), f"decision.{k}") for k in ("lower", "upper", "x0"))
-        for n, lo, hi, x in zip(names, lower, upper, x0):
-            if not lo < hi:
-                raise ValueError(f"bounds of {n} must have lower < upper, got [{lo}, {hi}]")
-            if not lo <= x <= hi:
-                raise ValueError(f"x0 {n} = {x} is outside its bounds [{lo}, {hi}]")
-        where = "settings.dt/duration"
-        dt, duration = float(RULES["dt"].check(d["dt"], "dt")), d["duration"]
-        time_grid(duration, dt, exact=False)
-        duration = float(duration)
-        where = "settings.goal"
-        goal = check_goal(_floats(d["goal"], 2, "goal"), duration)
-        where = "settings.fixed"
-        fixed = d["fixed"]
-        if not isinstance(fixed, dict) or not all(is_number(v) and np.isfinite(v) for v in fixed.values()):
-            raise ValueError(f"expected {{name: finite number}}, got {fixed!r}")
-        where = "settings.weights"
-        weights = d["weights"]
-        if not isinstance(weights, dict):
-            raise ValueError(f"expected {{term: weight}}, got {weights!r}")
-        for k, v in weights.items():
-            RULES["weight"].check(v, f"weights.{k}")
-        weights = Weights(**weights)
-        where = "settings.box_pose0/middle_pose0/box_direction"
-        box_pose0, middle_pose0 = _floats(d["box_pose0"], 7, "box_pose0"), _floats(d["middle_pose0"], 3, "middle_pose0")
-        direction = None if d["box_direction"] is None else _floats(d["box_direction"], 2, "box_direction")
-        where = "settings.cobra_parameters"
-        cobra = d["cobra_parameters"]
-        if not isinstance(cobra, dict):
-            raise ValueError(f"expected {{parameter: value}}, got {cobra!r}")
-        cobra = tuple((str(k), tuple(v) if isinstance(v, list) else v) for k, v in cobra.items())
-        CobraParameters(**dict(cobra))
-        where = "settings"
-        problem = ShootingProblem(
-            str(d["gait"]), goal, duration, dt, names, lower, upper, x0,
-            tuple(sorted((str(k), float(v)) for k, v in fixed.items())), weights, box_pose0, middle_pose0,
-            direction, cobra, str(d.get("servo", "position")), str(d.get("contact", "compliant")))
-        if problem.gait not in DECISION:
-            raise ValueError(f"unknown gait {problem.gait!r}; gaits: {', '.join(DECISION)}")
-        where = "settings (the gait at x0)"
-        problem.reference(problem.x0)
-        where = "settings.servo/contact"
-        problem.settings()
-    except KeyError as exc:
-        raise malformed(f"missing key {exc}") from None
-    except ShootingError as exc:
-        raise malformed(str(exc)) from None
-    except ValidationError as exc:
-        raise malformed(str(exc)) from None
-    except (TypeError, ValueError, AttributeError) as exc:
-        raise malformed(f"{type(exc).__name__}: {exc}") from None
-    return problem
+def _read_object(d, parts) -> dict:
+    if not isinstance(d, dict):
+        raise TypeError(f"expected an object, got {type(d).__name__}")
+    return {}
+
+
+def _read_decision(d, parts) -> dict:
+    dec = d["decision"]
+    names = tuple(map(str, dec["names"]))
+    lower, upper, x0 = (_floats(dec[k], len(names), f"decision.{k}") for k in ("lower", "upper", "x0"))
+    for n, lo, hi, x in zip(names, lower, upper, x0):
+        if not lo < hi:
+            raise ValueError(f"bounds of {n} must have lower < upper, got [{lo}, {hi}]")
+        if not lo <= x <= hi:
+            raise ValueError(f"x0 {n} = {x} is outside its bounds [{lo}, {hi}]")
+    return {"names": names, "lower": lower, "upper": upper, "x0": x0}
+
+
+def _read_time(d, parts) -> dict:
+    from ..infra.validation import RULES, time_grid
+
+    dt, duration = float(RULES["dt"].check(d["dt"], "dt")), d["duration"]
+    time_grid(duration, dt, exact=False)
+    return {"dt": dt, "duration": float(duration)}
+
+
+def _read_goal(d, parts) -> dict:
+    return {"goal": check_goal(_floats(d["goal"], 2, "goal"), parts["duration"])}
+
+
+def _read_fixed(d, parts) -> dict:
+    from ..infra.validation import is_number
+
+    fixed = d["fixed"]
+    if not isinstance(fixed, dict) or not all(is_number(v) and np.isfinite(v) for v in fixed.values()):
+        raise ValueError(f"expected {{name: finite number}}, got {fixed!r}")
+    return {"fixed": tuple(sorted((str(k), float(v)) for k, v in fixed.items()))}
+
+
+def _read_weights(d, parts) -> dict:
+    from ..infra.validation import RULES
+
+    weights = d["weights"]
+    if not isinstance(weights, dict):
+        raise ValueError(f"expected {{term: weight}}, got {weights!r}")
+    for k, v in weights.items():
+        RULES["weight"].check(v, f"weights.{k}")
+    return {"weights": Weights(**weights)}
+
+
+def _read_poses(d, parts) -> dict:
+    direction = None if d["box_direction"] is None else _floats(d["box_direction"], 2, "box_direction")
+    return {"box_pose0": _floats(d["box_pose0"], 7, "box_pose0"),
+            "middle_pose0": _floats(d["middle_pose0"], 3, "middle_pose0"), "box_direction": direction}
+
+
+def _read_cobra(d, parts) -> dict:
+    cobra = d["cobra_parameters"]
+    if not isinstance(cobra, dict):
+        raise ValueError(f"expected {{parameter: value}}, got {cobra!r}")
+    return {"cobra": CobraParameters(**{str(k): tuple(v) if isinstance(v, list) else v for k, v in cobra.items()})}
+
+
+def _read_step_settings(d, parts) -> dict:
+    servo, contact = str(d.get("servo", "position")), str(d.get("contact", "compliant"))
+    return {"settings": StepSettings(dt=parts["dt"], contact=contact, servo=servo)}
+
+
+def _read_problem(d, parts) -> dict:
+    fields = {f.name for f in dataclasses.fields(ShootingProblem)} - {"gait"}
+    problem = ShootingProblem(gait=str(d["gait"]), **{k: v for k, v in parts.items() if k in fields})
+    if problem.gait not in DECISION:
+        raise ValueError(f"unknown gait {problem.gait!r}; gaits: {', '.join(DECISION)}")
+    return {"problem": problem}
+
+
+def _read_gait(d, parts) -> dict:
+    problem = parts["problem"]
+    problem.reference(problem.x0)
+    return {}
+
+
+# (where, reader) in order: each reader returns its parts of the problem (``problem_from_dict``)
+_SETTINGS_READERS = (("settings", _read_object), ("settings.decision", _read_decision),
+                     ("settings.dt/duration", _read_time), ("settings.goal", _read_goal),
+                     ("settings.fixed", _read_fixed), ("settings.weights", _read_weights),
+                     ("settings.box_pose0/middle_pose0/box_direction", _read_poses),
+                     ("settings.cobra_parameters", _read_cobra), ("settings.servo/contact", _read_step_settings),
+                     ("settings", _read_problem), ("settings (the gait at x0)", _read_gait))
 
 
 def _floats(values, n: int | None = None, field: str = "values") -> tuple:
@@ -142,12 +184,10 @@ def transfer(problem: ShootingProblem, x, plan_entry: dict | None = None, check_
     impact impulse per second [N s/s] in each (``TRANSFER_KEYS``), and the check's error if its
     simulation failed (its numbers are then None).
 
-    Helper: the transfer record of a params JSON ("transfer"). ``plan_entry``: the optimum's
-    history entry (its numbers are used; None = roll the plan out again). The check starts from
-    the same box pose and robot middle as the plan (``start_state`` with the check's dt).
+    The transfer record of a params JSON ("transfer"). ``plan_entry``: the optimum's history entry
+    (its numbers are used; None = roll the plan out again). The check starts from the same box
+    pose and robot middle as the plan (``start_state`` with the check's dt).
     """
-    from ..step import SimulationError
-
     def numbers(traj) -> tuple:
         d = float(np.linalg.norm(traj.box_pose[-1, :2] - problem.goal_world))
         return d, float(np.sum(traj.steps["impact_impulse"])) / problem.duration
@@ -160,7 +200,8 @@ def transfer(problem: ShootingProblem, x, plan_entry: dict | None = None, check_
               "check_distance_to_goal": None, "plan_impact_impulse_per_s": plan[1],
               "check_impact_impulse_per_s": None, "check_error": None}
     try:
-        check = numbers(rollout(dataclasses.replace(problem, dt=float(check_dt)), x))
+        settings = dataclasses.replace(problem.settings, dt=float(check_dt))
+        check = numbers(rollout(dataclasses.replace(problem, settings=settings), x))
         record.update(check_distance_to_goal=check[0], check_impact_impulse_per_s=check[1])
     except SimulationError as exc:
         record["check_error"] = str(exc)
@@ -193,13 +234,11 @@ def impact_comparison(result) -> dict | None:
     """The optimum beside the rollout of least J - w_I I (the companion search's, ``search.optimize``):
     for each, the rollout's index, parameters, J - w_I I, box distance to the goal [m] and impact
     impulse per second [N s/s]; ``lower`` is true when the optimum's impact impulse is below the
-    other's, ``same`` when both are one rollout. None without the companion search.
-
-    Helper: the "with and without the impact term" record of the params JSON.
+    other's, ``same`` when both are one rollout: the "with and without the impact term" record of
+    the params JSON. None without the companion search.
     """
     if result.without_impact is None:
         return None
-    from .search import cost_without_impact
 
     def row(e: dict) -> dict:
         impulse = None if e.get("contact") is None else e["contact"]["impact_impulse"] / result.problem.duration
@@ -356,7 +395,7 @@ class ParamsRun(NamedTuple):
 def params_reference(path: str, duration: float | None = None) -> ParamsRun:
     """Read a params JSON and return everything to replay its optimum with ``simulate``.
 
-    Helper: ``cobra-ref simulate --params``. ``duration`` None = the optimization's horizon (then
+    For ``cobra-ref simulate --params``. ``duration`` None = the optimization's horizon (then
     ``params_summary`` checks that the replayed cost equals the recorded one; else a whole number of
     the optimization's steps). Raises ``ShootingError`` for a missing or malformed file or a bad
     ``duration``.
@@ -371,8 +410,8 @@ def params_reference(path: str, duration: float | None = None) -> ParamsRun:
         except ValidationError as exc:
             raise ShootingError(str(exc)) from None
     x = decision_vector(problem, record["params"])
-    model = cobra_model(problem.cobra_parameters())
+    model = cobra_model(problem.cobra)
     q0, qd0 = start_state(problem, x, model)
-    return ParamsRun(problem.gait, problem.reference(x), problem.settings(),
+    return ParamsRun(problem.gait, problem.reference(x), problem.settings,
                      problem.duration if duration is None else float(duration), q0, qd0, model, problem,
                      float(record["cost"]), record.get("code", {}).get("physics_sha256") == code_version(planning=True)["physics_sha256"])

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..infra.executors import default_executor, shutdown
 from ..gaits import gait_params
-from .cost import evaluate
+from .cost import cost_without_impact, evaluate
 from .problem import DEFAULT_MAXITER, DEFAULTS, ShootingError, ShootingProblem, make_problem
 from .results import CHECK_DT, transfer, write_result
 
@@ -116,48 +116,62 @@ def _key(x) -> tuple:
     return tuple(np.round(np.asarray(x, dtype=float), 12))
 
 
-def cost_without_impact(problem: ShootingProblem, entry: dict) -> float:
-    """J - w_I I of a history entry (a failed rollout keeps its J).
-
-    Helper: the cost the companion search of ``optimize`` minimizes.
-    """
-    terms = entry.get("terms")
-    return entry["cost"] if terms is None else entry["cost"] - problem.weights.impact * terms["impact"]
-
-
 def _distance_text(entry: dict) -> str:
     d = entry["box_distance_to_goal"]
     return "simulation failed" if d is None else f"{d:.4f} m"
 
 
-def optimize(problem: ShootingProblem, method: str = "pattern", maxiter: int = DEFAULT_MAXITER,
-             executor: Executor | None = None, seed: int = 0, progress=None, step: float = 0.25,
-             min_step: float = 1 / 64, popsize: int = 2, workers: int | None = None,
-             companion: bool = True) -> ShootingResult:
+@dataclass(frozen=True)
+class SearchOptions:
+    """How ``optimize`` searches (its docstring says what each method does): ``method``
+    ("pattern" or "de"), ``maxiter`` (polls or generations), ``seed`` (DE's; recorded only for the
+    pattern search), ``step`` and ``min_step`` (the compass search's first and smallest step, as
+    fractions of the bounds' range), ``popsize`` (DE's members per parameter), ``companion`` (the
+    search without the impact term after the search of J). ShootingError for a bad method or
+    maxiter."""
+
+    method: str = "pattern"
+    maxiter: int = DEFAULT_MAXITER
+    seed: int = 0
+    step: float = 0.25
+    min_step: float = 1 / 64
+    popsize: int = 2
+    companion: bool = True
+
+    def __post_init__(self):
+        if self.method not in ("pattern", "de"):
+            raise ShootingError(f"method must be 'pattern' or 'de', got {self.method!r}")
+        if int(self.maxiter) != self.maxiter or self.maxiter < 0:
+            raise ShootingError(f"maxiter must be a non-negative integer, got {self.maxiter}")
+
+
+def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), executor: Executor | None = None,
+             progress=None, workers: int | None = None) -> ShootingResult:
     """Minimise J(p) over the bounds from ``problem.x0``; every rollout goes through ``executor``.
 
     Implements: the single-shooting optimizer (derivative-free, bounded, deterministic).
 
-    ``method="pattern"`` (default): a parallel compass search (Kolda, Lewis, Torczon 2003, "Optimization
-    by direct search", sec. 3) in the box scaled to [0, 1]^n: each iteration polls the 2n points
-    x +- step e_i (clipped to the bounds) in one parallel batch, moves to the best if it lowers J,
-    else halves ``step``; it stops after ``maxiter`` polls or when step < ``min_step``. Why this
-    default: a 1.5 s rollout costs 5-15 s on the 2-core machine, so the 5-minute budget buys a few
-    dozen rollouts; the compass search starts from the known-good default gait, needs no gradient
-    (J is non-smooth through the contacts), uses the 2n independent polls to fill the cores, never
-    re-runs a point, and makes progress within a few dozen rollouts (C at its defaults: cost 1.19 ->
-    0.059, box 0.055 -> 0.001 m from the goal in 22 rollouts). It has no randomness (``seed`` is recorded only).
-    ``method="de"``: ``scipy.optimize.differential_evolution`` (best1bin, Latin hypercube start
-    with x0 as its first member, ``popsize`` * n members, ``updating="deferred"``, ``polish=False``,
-    ``rng=seed``), whose ``workers`` map is our executor: a global search for users with an
-    executor bigger than one machine (for example Dask's ``Client.get_executor()``).
+    ``search.method="pattern"`` (default): a parallel compass search (Kolda, Lewis, Torczon 2003,
+    "Optimization by direct search", sec. 3) in the box scaled to [0, 1]^n: each iteration polls
+    the 2n points x +- step e_i (clipped to the bounds) in one parallel batch, moves to the best if
+    it lowers J, else halves ``step``; it stops after ``maxiter`` polls or when step <
+    ``min_step``. Why this default: a rollout costs seconds (docs/results.md, "Planner"), so a
+    budget of minutes buys a few dozen rollouts; the compass search starts from the known-good
+    default gait, needs no gradient (J is non-smooth through the contacts), uses the 2n independent
+    polls to fill the cores, never re-runs a point, and makes progress within a few dozen rollouts
+    (docs/planning.md, the optima's table).
+    It has no randomness (``seed`` is recorded only).
+    ``search.method="de"``: ``scipy.optimize.differential_evolution`` (best1bin, Latin hypercube
+    start with x0 as its first member, ``popsize`` * n members, ``updating="deferred"``,
+    ``polish=False``, ``rng=seed``), whose ``workers`` map is our executor: a global search for
+    users with an executor bigger than one machine (for example Dask's ``Client.get_executor()``).
 
-    The companion search (``companion``, when w_I > 0): after the search of J, the same search
-    from the same x0 minimizes J - w_I I, the cost without the impact term, on the same record of
-    rollouts (a point either search polled runs once). The optimum is the rollout of least J among
-    all of both searches, and ``without_impact`` the rollout of least J - w_I I among the same.
-    Over one common set of rollouts this makes the optimum's impact term no larger than the
-    unpenalized optimum's: J(p*) <= J(p0) and J(p0) - w_I I(p0) <= J(p*) - w_I I(p*) give
+    The companion search (``search.companion``, when w_I > 0): after the search of J, the same
+    search from the same x0 minimizes J - w_I I, the cost without the impact term, on the same
+    record of rollouts (a point either search polled runs once). The optimum is the rollout of
+    least J among all of both searches, and ``without_impact`` the rollout of least J - w_I I among
+    the same. Over one common set of rollouts this makes the optimum's impact term no larger than
+    the unpenalized optimum's: J(p*) <= J(p0) and J(p0) - w_I I(p0) <= J(p*) - w_I I(p*) give
     w_I I(p*) <= w_I I(p0), equal only when both are the same rollout (or tie). Without the
     companion, a local search's two optima come from two different paths, and either can have
     fewer impacts (docs/planning.md, "With and without the impact term").
@@ -169,21 +183,17 @@ def optimize(problem: ShootingProblem, method: str = "pattern", maxiter: int = D
     ``interrupted=True``. The result is the same for any executor (the rollouts are deterministic
     and each batch is collected in order).
     """
-    if method not in ("pattern", "de"):
-        raise ShootingError(f"method must be 'pattern' or 'de', got {method!r}")
-    if int(maxiter) != maxiter or maxiter < 0:
-        raise ShootingError(f"maxiter must be a non-negative integer, got {maxiter}")
     own = executor is None
     executor = default_executor(workers) if own else executor
-    evals = _Evaluations(problem, executor, progress, maxiter)
-    interrupted, message, options = False, "", {"step": step, "min_step": min_step, "popsize": popsize}
+    evals = _Evaluations(problem, executor, progress, search.maxiter)
+    interrupted, message = False, ""
+    run = _compass_search if search.method == "pattern" else _differential_evolution
     try:
-        search = _compass_search if method == "pattern" else _differential_evolution
-        message = search(problem, evals, maxiter, seed=seed, **options)
+        message = run(problem, evals, search)
         iterations = evals.iteration
-        if companion and problem.weights.impact > 0:
+        if search.companion and problem.weights.impact > 0:
             evals.label, evals.search, evals.iteration = "without the impact term: ", "J - w_I I", 0
-            message += "; without the impact term: " + search(problem, evals.without_impact, maxiter, seed=seed, **options)
+            message += "; without the impact term: " + run(problem, evals.without_impact, search)
     except KeyboardInterrupt:
         interrupted, message = True, "interrupted (Ctrl-C): the best rollout so far is kept"
     finally:
@@ -193,8 +203,10 @@ def optimize(problem: ShootingProblem, method: str = "pattern", maxiter: int = D
         raise ShootingError("interrupted before any rollout finished: nothing to keep")
     iterations = evals.iteration if evals.search == "J" else iterations
     unpenalized = evals.best(lambda e: cost_without_impact(problem, e)) if evals.search != "J" else None
-    return ShootingResult(problem, method, seed, int(maxiter), {**options, "companion": evals.search != "J"},
-                          evals.history, evals.best(), max(iterations - 1, 0), interrupted, message,
+    options = {"step": search.step, "min_step": search.min_step, "popsize": search.popsize,
+               "companion": evals.search != "J"}
+    return ShootingResult(problem, search.method, search.seed, int(search.maxiter), options, evals.history,
+                          evals.best(), max(iterations - 1, 0), interrupted, message,
                           time.perf_counter() - evals.start, without_impact=unpenalized)
 
 
@@ -238,9 +250,10 @@ def compass_search(evaluate_batch, x0, lower, upper, maxiter: int, step: float =
     return to_x(u), f_u, f"stopped after maxiter = {maxiter} polls (step {step:.4g})"
 
 
-def _compass_search(problem, evals, maxiter, seed, step, min_step, popsize) -> str:
+def _compass_search(problem: ShootingProblem, evaluate_batch, search: SearchOptions) -> str:
     """``compass_search`` on the shooting problem (see ``optimize``); returns why it stopped."""
-    return compass_search(evals, problem.x0, problem.lower, problem.upper, maxiter, step, min_step)[2]
+    return compass_search(evaluate_batch, problem.x0, problem.lower, problem.upper, search.maxiter, search.step,
+                          search.min_step)[2]
 
 
 def differential_evolution_search(evaluate_batch, x0, lower, upper, maxiter: int, seed: int = 0,
@@ -260,9 +273,10 @@ def differential_evolution_search(evaluate_batch, x0, lower, upper, maxiter: int
     return res.x, float(res.fun), f"differential evolution: {res.message}"
 
 
-def _differential_evolution(problem, evals, maxiter, seed, step, min_step, popsize) -> str:
+def _differential_evolution(problem: ShootingProblem, evaluate_batch, search: SearchOptions) -> str:
     """``differential_evolution_search`` on the shooting problem (see ``optimize``)."""
-    return differential_evolution_search(evals, problem.x0, problem.lower, problem.upper, maxiter, seed, popsize)[2]
+    return differential_evolution_search(evaluate_batch, problem.x0, problem.lower, problem.upper, search.maxiter,
+                                         search.seed, search.popsize)[2]
 
 
 def _not_called(x):
@@ -270,25 +284,24 @@ def _not_called(x):
     raise RuntimeError("the shooting objective is evaluated through the executor map")
 
 
-def optimize_gait(name: str, goal=None, out: str | None = None, duration: float | None = None,
-                  maxiter: int | None = None, executor: Executor | None = None, progress=None,
-                  check_dt: float | None = CHECK_DT, **options) -> ShootingResult:
-    """Optimize one gait at its defaults (``DEFAULTS[name]``: goal, horizon, maxiter, unless given),
-    check the optimum at ``check_dt`` (``results.transfer``; None = no check) and write the params
-    JSON to ``out`` (default ``optimized/<name>.json``; "" = do not write).
+def optimize_gait(name: str, goal=None, out: str | None = None, executor: Executor | None = None, progress=None,
+                  check_dt: float | None = CHECK_DT, search: SearchOptions | None = None,
+                  **problem_options) -> ShootingResult:
+    """Optimize one gait at its defaults (``DEFAULTS[name]``: goal, horizon and maxiter, unless
+    given), check the optimum at ``check_dt`` (``results.transfer``; None = no check) and write the
+    params JSON to ``out`` (default ``optimized/<name>.json``; "" = do not write): what
+    ``cobra-ref figures --reoptimize`` runs per gait.
 
-    Helper: what ``cobra-ref figures --reoptimize`` runs per gait. ``progress`` defaults to
-    lines on stderr; ``options`` go to ``make_problem`` (bounds, x0, ramp_time, weights, ...) or
-    ``optimize`` (method, seed, popsize, step, workers).
+    ``progress`` defaults to lines on stderr; ``search``: ``SearchOptions`` (default: the gait's
+    maxiter); ``problem_options`` go to ``make_problem`` (duration, settings, space, weights, cobra,
+    box_gap).
     """
     d_goal, d_duration, d_maxiter = DEFAULTS[name]
-    run_keys = {"method", "seed", "popsize", "step", "min_step", "workers", "companion"}
-    problem = make_problem(name, d_goal if goal is None else goal, duration=duration or d_duration,
-                           **{k: v for k, v in options.items() if k not in run_keys})
+    problem_options["duration"] = problem_options.get("duration") or d_duration
+    problem = make_problem(name, d_goal if goal is None else goal, **problem_options)
     if progress is None:
         progress = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
-    result = optimize(problem, maxiter=d_maxiter if maxiter is None else maxiter, executor=executor,
-                      progress=progress, **{k: v for k, v in options.items() if k in run_keys})
+    result = optimize(problem, SearchOptions(maxiter=d_maxiter) if search is None else search, executor, progress)
     if check_dt is not None and result.best["terms"] is not None:
         x = [result.best["params"][n] for n in problem.names]
         result.transfer = transfer(problem, x, result.best, check_dt)

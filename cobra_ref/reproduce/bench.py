@@ -27,6 +27,7 @@ import time
 import numpy as np
 
 from ..gaits import RollingGait
+from ..infra.validation import DEFAULT_DT
 from ..robots import cobra_model
 from ..simulate import simulate
 from ..start import initial_state
@@ -36,7 +37,7 @@ from ..fast.stepper import PHASES
 REFERENCE_STEPS = 100
 
 
-def run_bench(duration: float = 2.0, dt: float = 1e-3, with_mujoco: bool = True, progress=None) -> dict:
+def run_bench(duration: float = 2.0, dt: float = DEFAULT_DT, with_mujoco: bool = True, progress=None) -> dict:
     """Time the rolling push; return the benchmark record (see the module docstring).
 
     Helper: the benchmark (cobra-ref bench).

@@ -78,16 +78,18 @@ comparison adds its own entries (``mujoco_check.claims``).
 from __future__ import annotations
 
 import math
-from fractions import Fraction
 
 import numpy as np
 
 from . import analysis
+from .claims_report import to_markdown
+from .verdicts import claim_entry, failed_runs, ok, own_values, scenarios, stats, verdict
+
+__all__ = ["directions", "ensemble_claims", "ensemble_summaries", "gait_summaries", "inefficiency", "paper_claims",
+           "to_markdown", "verdict"]
 
 ROLLING = ("C", "S", "J", "J-mirror")
 SIDEWINDING = "sidewinding"
-HOLDS_AT = 0.8  # fraction of members for "holds"
-FAILS_AT = 0.2  # fraction of members at or below which it "does not hold"
 RESOLUTION = 1e-3  # a box displacement resolved [m]
 IMPULSE_SHARE = 0.01  # NI: impacts' mean force / m g
 MIN_PHASE_CORRELATION = 0.7  # PS
@@ -96,103 +98,24 @@ GOAL_ANGLE_DEG = 30.0  # GT
 DIRECTION_MARGIN_DEG = 5.0  # MJ-C
 
 
-# --- ensemble bookkeeping ---------------------------------------------------------------------------------------
-
-
-def _usable(s: dict, keys) -> bool:
-    for k in keys:
-        v = s.get(k)
-        if v is None:
-            return False
-        if isinstance(v, float) and math.isnan(v):
-            return False
-    return True
-
-
-def _failed_runs(ensemble: dict, gaits) -> dict:
-    """{"gait[i]": error} of the runs with an error among ``gaits``."""
-    return {f"{g}[{i}]": s["error"] for g in gaits if g in ensemble
-            for i, s in enumerate(ensemble[g]) if s.get("error")}
-
-
-def _ok(s: dict, keys) -> bool:
-    return not s.get("error") and _usable(s, keys)
-
-
-def _scenarios(ensemble: dict, gaits, keys) -> list[int]:
-    """The scenarios i at which every gait of ``gaits`` has a member without error and with ``keys``."""
-    if not gaits or any(g not in ensemble for g in gaits):
-        return []
-    n = min(len(ensemble[g]) for g in gaits)
-    return [i for i in range(n) if all(_ok(ensemble[g][i], keys) for g in gaits)]
-
-
-def _own_values(ensemble: dict, gaits, key: str, statistic=None) -> dict:
-    """{gait: mean and spread} of ``statistic(summary)`` (default ``summary[key]``) over each gait's
-    own usable members: the numbers shown when no scenario has every gait."""
-    statistic = statistic or (lambda s: s[key])
-    out = {}
-    for g in gaits:
-        v = [statistic(s) for s in ensemble.get(g, []) if _ok(s, [key])]
-        if v:
-            out[g] = _stats(v)
-    return out
-
-
-def _stats(values) -> dict:
-    v = [float(x) for x in values if not (isinstance(x, float) and math.isnan(x))]
-    if not v:
-        return {"mean": float("nan"), "spread": [float("nan"), float("nan")]}
-    return {"mean": float(np.mean(v)), "spread": [float(min(v)), float(max(v))]}
-
-
-def verdict(n: int, n_holds: int) -> tuple:
-    """(holds, verdict) of a claim that held for ``n_holds`` of ``n`` members.
-
-    Helper: the 80/20 rule of the module docstring: holds when n_holds >= 0.8 n, does not hold
-    when n_holds <= 0.2 n (``HOLDS_AT``, ``FAILS_AT``; compared as exact fractions, so 4 of 5 is
-    80 %), undecided between, not tested when n = 0.
-    """
-    if n == 0:
-        return None, "not tested"
-    share = Fraction(n_holds, n)
-    if share >= Fraction(HOLDS_AT).limit_denominator(100):
-        return True, "holds"
-    if share <= Fraction(FAILS_AT).limit_denominator(100):
-        return False, "does not hold"
-    return None, "undecided"
-
-
-def _entry(cid, text, values, results, failed, details=None, reason=""):
-    """A claim dict from per-member booleans ``results``."""
-    n, k = len(results), int(sum(bool(r) for r in results))
-    holds, word = verdict(n, k)
-    details = dict(details or {})
-    if n == 0:
-        details["not tested because"] = reason or "no member could be evaluated"
-    return {"id": cid, "claim": text, "values": values, "holds": holds, "verdict": word,
-            "ensemble": {"n": n, "holds": k, "fraction": (k / n) if n else None, "left_out": failed},
-            "details": details}
-
-
 # --- the claims ------------------------------------------------------------------------------------------------
 
 
 def _rank(ensemble, cid, text, key, winner=SIDEWINDING, largest=True):
     """``winner``'s ``key`` is larger (smaller) than every other gait's, per scenario."""
     gaits = list(ensemble)
-    failed = _failed_runs(ensemble, gaits)
+    failed = failed_runs(ensemble, gaits)
     if winner not in ensemble or len(gaits) < 2:
-        return _entry(cid, text, _own_values(ensemble, gaits, key), [], failed,
+        return claim_entry(cid, text, own_values(ensemble, gaits, key), [], failed,
                       reason=f"needs {winner} and another gait")
-    idx = _scenarios(ensemble, gaits, [key])
-    values = {g: _stats([ensemble[g][i][key] for i in idx]) for g in gaits} if idx else _own_values(ensemble, gaits, key)
+    idx = scenarios(ensemble, gaits, [key])
+    values = {g: stats([ensemble[g][i][key] for i in idx]) for g in gaits} if idx else own_values(ensemble, gaits, key)
     results = []
     for i in idx:
         w = ensemble[winner][i][key]
         others = [ensemble[g][i][key] for g in gaits if g != winner]
         results.append(w > max(others) if largest else w < min(others))
-    return _entry(cid, text, values, results, failed, reason=f"no scenario with every gait's {key}")
+    return claim_entry(cid, text, values, results, failed, reason=f"no scenario with every gait's {key}")
 
 
 def inefficiency(slope: float) -> float:
@@ -211,14 +134,14 @@ def _efficiency(ensemble):
             "or sidewinding overlap")
     better, worse = ("S", "J"), ("C", SIDEWINDING)
     gaits = better + worse
-    failed = _failed_runs(ensemble, gaits)
-    idx = _scenarios(ensemble, gaits, ["efficiency_slope"])
+    failed = failed_runs(ensemble, gaits)
+    idx = scenarios(ensemble, gaits, ["efficiency_slope"])
     slope = {g: [inefficiency(ensemble[g][i]["efficiency_slope"]) for i in idx] for g in gaits if g in ensemble}
-    values = {g: _stats(v) for g, v in slope.items()} if idx else \
-        _own_values(ensemble, gaits, "efficiency_slope", lambda s: inefficiency(s["efficiency_slope"]))
+    values = {g: stats(v) for g, v in slope.items()} if idx else \
+        own_values(ensemble, gaits, "efficiency_slope", lambda s: inefficiency(s["efficiency_slope"]))
     results = [max(slope["S"][k], slope["J"][k]) < min(slope["C"][k], slope[SIDEWINDING][k])
                for k in range(len(idx))]
-    entry = _entry("E", text, values, results, failed, reason="needs S, J, C and sidewinding")
+    entry = claim_entry("E", text, values, results, failed, reason="needs S, J, C and sidewinding")
     if idx:
         overlap = [(b, w) for b in better for w in worse
                    if min(slope[b]) <= max(slope[w]) and min(slope[w]) <= max(slope[b])]
@@ -233,12 +156,12 @@ def _mirror(ensemble):
             f"|y_J + y_M| <= s_y + {1e3 * RESOLUTION:g} mm (s: spread of J's displacements), and y_J, y_M of "
             f"opposite signs, each beyond {1e3 * RESOLUTION:g} mm (sideways box displacement y [m])")
     gaits = ("J", "J-mirror")
-    failed = _failed_runs(ensemble, gaits)
-    idx = _scenarios(ensemble, gaits, ["box_displacement"])
+    failed = failed_runs(ensemble, gaits)
+    idx = scenarios(ensemble, gaits, ["box_displacement"])
     dJ = np.array([ensemble["J"][i]["box_displacement"] for i in idx], dtype=float).reshape(-1, 2)
     dM = np.array([ensemble["J-mirror"][i]["box_displacement"] for i in idx], dtype=float).reshape(-1, 2)
-    values = {g: _stats(d[:, 1]) for g, d in (("J", dJ), ("J-mirror", dM))} if idx \
-        else _own_values(ensemble, gaits, "box_displacement", lambda s: s["box_displacement"][1])
+    values = {g: stats(d[:, 1]) for g, d in (("J", dJ), ("J-mirror", dM))} if idx \
+        else own_values(ensemble, gaits, "box_displacement", lambda s: s["box_displacement"][1])
     results, details = [], {}
     if idx:
         s = np.ptp(dJ, axis=0)
@@ -247,7 +170,7 @@ def _mirror(ensemble):
         for (xJ, yJ), (xM, yM) in zip(dJ, dM):
             results.append(bool(abs(xJ - xM) <= tol[0] and abs(yJ + yM) <= tol[1] and yJ * yM < 0
                                 and min(abs(yJ), abs(yM)) > RESOLUTION))
-    return _entry("MJ", text, values, results, failed, details, reason="needs J and J-mirror")
+    return claim_entry("MJ", text, values, results, failed, details, reason="needs J and J-mirror")
 
 
 def _angle_deg(a, b) -> float:
@@ -281,15 +204,15 @@ def _steering(ensemble):
             f"displacements exceeds h_J + h_C + {DIRECTION_MARGIN_DEG:g} deg (h: each ensemble's angular "
             f"half-spread; box direction [deg])")
     gaits = ("J", "C")
-    failed = _failed_runs(ensemble, gaits)
-    idx = _scenarios(ensemble, gaits, ["box_displacement"])
+    failed = failed_runs(ensemble, gaits)
+    idx = scenarios(ensemble, gaits, ["box_displacement"])
     d = {g: [ensemble[g][i]["box_displacement"] for i in idx] for g in gaits}
     results, details = [], {}
-    values = _own_values(ensemble, gaits, "box_displacement",
+    values = own_values(ensemble, gaits, "box_displacement",
                          lambda s: math.degrees(math.atan2(s["box_displacement"][1], s["box_displacement"][0])))
     if idx:
         dirs = {g: directions(d[g]) for g in gaits}
-        values = {g: _stats([dirs[g][0] + x for x in dirs[g][1]]) for g in gaits}
+        values = {g: stats([dirs[g][0] + x for x in dirs[g][1]]) for g in gaits}
         half = {g: dirs[g][2] for g in gaits}
         threshold = (half["J"] if half["J"] == half["J"] else 0.0) + (half["C"] if half["C"] == half["C"] else 0.0) \
             + DIRECTION_MARGIN_DEG
@@ -301,7 +224,7 @@ def _steering(ensemble):
         for a, b in zip(d["J"], d["C"]):
             moved = math.hypot(*a) > RESOLUTION and math.hypot(*b) > RESOLUTION
             results.append(bool(moved and _angle_deg(a, b) > threshold))
-    return _entry("MJ-C", text, values, results, failed, details, reason="needs J and C")
+    return claim_entry("MJ-C", text, values, results, failed, details, reason="needs J and C")
 
 
 def _per_run(ensemble, cid, text, keys, statistic, condition, details=None, gaits=None):
@@ -309,17 +232,17 @@ def _per_run(ensemble, cid, text, keys, statistic, condition, details=None, gait
     all), ``statistic(summary)`` its number. The verdict is over all the runs; ``details["per
     gait"]`` gives each gait's own verdict by the same rule ("C: holds (8 of 8)")."""
     gaits = list(ensemble) if gaits is None else [g for g in gaits if g in ensemble]
-    failed = _failed_runs(ensemble, gaits)
+    failed = failed_runs(ensemble, gaits)
     values, results, per_gait = {}, [], {}
     for g in gaits:
-        members = [s for s in ensemble[g] if _ok(s, keys)]
+        members = [s for s in ensemble[g] if ok(s, keys)]
         if members:
-            values[g] = _stats([statistic(s) for s in members])
+            values[g] = stats([statistic(s) for s in members])
             held = [bool(condition(s)) for s in members]
             results += held
             per_gait[g] = f"{verdict(len(held), sum(held))[1]} ({sum(held)} of {len(held)})"
     details = {**(details or {}), **({"per gait": per_gait} if per_gait else {})}
-    return _entry(cid, text, values, results, failed, details, reason=f"no run with {', '.join(keys)}")
+    return claim_entry(cid, text, values, results, failed, details, reason=f"no run with {', '.join(keys)}")
 
 
 def _phase_ok(s) -> bool:
@@ -438,94 +361,3 @@ def ensemble_summaries(members: list[dict]) -> dict:
     per_member = [gait_summaries(m) for m in members]
     gaits = list(dict.fromkeys(g for m in per_member for g in m))
     return {g: [m.get(g, {"error": "no run"}) for m in per_member] for g in gaits}
-
-
-def _fmt(v) -> str:
-    if isinstance(v, bool) or v is None:
-        return str(v)
-    if isinstance(v, (float, np.floating)):
-        v = float(v)
-        return "nan" if v != v else ("inf" if np.isinf(v) else f"{v:.4g}")
-    if isinstance(v, (list, tuple)):
-        return "(" + ", ".join(_fmt(x) for x in v) + ")"
-    if isinstance(v, dict):
-        return "; ".join(f"{k}: {_fmt(x)}" for k, x in v.items())
-    return str(v)
-
-
-def _cell(text: str) -> str:
-    """``text`` safe inside a Markdown table cell (its | escaped)."""
-    return str(text).replace("|", "\\|")
-
-
-def _mean_spread(st: dict) -> str:
-    lo, hi = st["spread"]
-    if lo == hi:
-        return _fmt(st["mean"])  # one member, or all alike
-    return f"{_fmt(st['mean'])} [{_fmt(lo)}, {_fmt(hi)}]"
-
-
-TABLE = (("duration", "T (s)", 1.0), ("locomotion_work", "W_loc (J)", 1.0), ("box_work", "W_box (J)", 1.0),
-         ("efficiency_slope", "slope", 1.0), ("peak_abs_power", "peak abs(P) (W)", 1.0),
-         ("power_cv", "CV of abs(P)", 1.0), ("box_distance", "box moved (m)", 1.0),
-         ("impact_impulse_per_second", "impact impulse/s (N)", 1.0),
-         ("fixed_point_converged", "fixed point converged (%)", 100.0),
-         ("steps_over_torque_limit", "steps over tau_max (%)", 100.0),
-         ("max_tracking_error", "largest joint error (rad)", 1.0), ("rms_tracking_error", "RMS joint error (rad)", 1.0),
-         ("ledger_residual", "energy ledger residual (%)", 100.0), ("max_penetration", "max penetration (m)", 1.0))
-
-
-def to_markdown(claims: list[dict], summaries: dict, settings: dict) -> str:
-    """``claims.md``: the claims with their per-gait numbers, the members evaluated and holding,
-    and the verdicts; then per gait the mean [min, max] over the members of the summary's
-    numbers and the runs' health (fixed-point convergence, torque limit, penetration), the
-    failed runs, and the settings. ``summaries`` is {gait: [summary, ...]} or {gait: summary}.
-
-    Helper: the human-readable claims report.
-    """
-    ens = {g: (list(v) if isinstance(v, (list, tuple)) else [v]) for g, v in summaries.items()}
-    lines = ["# Claims of [COBRA] checked in cobra_ref", "",
-             "Generated by `cobra-ref figures`; every number is computed from the simulations in this run "
-             "(definitions: `cobra_ref/analysis.py`, assumption A18; the claims and their thresholds: "
-             "`cobra_ref/reproduce/claims.py`). A claim is evaluated per ensemble member (per scenario when it "
-             "compares gaits); it holds when it holds for >= 80 % of them, does not hold when for <= 20 %, and is "
-             "undecided between.", "",
-             "| id | claim | per gait: mean [min, max] | n | members holding | verdict |", "|---|---|---|---|---|---|"]
-    for c in claims:
-        word = c.get("verdict") or {True: "holds", False: "does not hold", None: "not tested"}[c["holds"]]
-        e = c.get("ensemble") or {}
-        vals = c.get("values") or {}
-        if vals and all(isinstance(v, dict) and "mean" in v for v in vals.values()):
-            shown = "; ".join(f"{g}: {_mean_spread(v)}" for g, v in vals.items())
-        else:
-            shown = _fmt(vals)
-        notes = [f"{k}: {_fmt(v)}" for k, v in (c.get("details") or {}).items() if v not in ([], {}, None)]
-        if e.get("left_out"):
-            notes.append("left out: " + _fmt(e["left_out"]))
-        if notes:
-            shown += " (" + "; ".join(notes) + ")"
-        n = e.get("n", "")
-        held = e.get("holds", "")
-        lines.append(f"| {c['id']} | {_cell(c['claim'])} | {_cell(shown)} | {n} | {held} | **{word}** |")
-    one = all(len(m) == 1 for m in ens.values())
-    lines += ["", "## Per gait (the figure runs)" if one else "## Per gait (mean [min, max] over the members that completed)", "",
-              "| gait | members (completed / all) | " + " | ".join(h for _, h, _ in TABLE) + " |",
-              "|---|---|" + "---|" * len(TABLE)]
-    failed = []
-    for g, members in ens.items():
-        ok = [s for s in members if not s.get("error")]
-        failed += [f"{g}[{i}]: {_cell(s['error'])}" for i, s in enumerate(members) if s.get("error")]
-        cells = []
-        for key, _, scale in TABLE:
-            v = [scale * float(s[key]) for s in ok if s.get(key) is not None]
-            cells.append(_mean_spread(_stats(v)) if v else "")
-        lines.append(f"| {g} | {len(ok)} / {len(members)} | " + " | ".join(cells) + " |")
-    if failed:
-        lines += ["", "Failed runs (left out of every claim):", ""] + [f"- {f}" for f in failed]
-    lines += ["", "## Settings", ""] + [f"- {k}: {_fmt(v)}" for k, v in settings.items()]
-    lines += ["", "Model choices that change these outcomes: the robot-box "
-              "friction mu_rb = 0.5 (assumption A22; at mu_rb = 1 the rolling push self-locks), the box "
-              "placement per gait (assumption A9, cobra_ref/start.py), and the joints, position servos whose "
-              "torque is clamped at tau_max (assumption A7: 'steps over tau_max' counts the steps where the "
-              "clamp was exceeded)."]
-    return "\n".join(lines) + "\n"

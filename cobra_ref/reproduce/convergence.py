@@ -36,7 +36,7 @@ from ..gaits import gait
 from ..placement import travel_placement
 from ..robots import cobra_model
 from ..simulate import simulate
-from ..start import initial_state
+from ..start import BoxPlacement, initial_state
 from ..step import StepSettings
 from ..infra.validation import ValidationError
 
@@ -126,10 +126,9 @@ def study(gait_name: str = "J", duration: float = 2.0, dts=DTS, settings=tuple(S
     check_restart(restart, duration, dts)
     model, ref = cobra_model(), gait(gait_name)
     # the box where the figures put it: a travelling gait's ahead of its wave (placed once, at 1 ms)
-    where = {}
+    where = BoxPlacement()
     if gait_name == "sidewinding":
-        p = travel_placement(cobra_model(with_box=False), ref)
-        where = {"box_direction": p.direction, "box_gap": p.box_gap}
+        where = travel_placement(cobra_model(with_box=False), ref).box
     out = {}
     for name in settings:
         contact, servo = SETTINGS[name]
@@ -137,13 +136,13 @@ def study(gait_name: str = "J", duration: float = 2.0, dts=DTS, settings=tuple(S
         common = None  # restart: the finest dt's state at T, where every dt starts
         if restart > 0:
             finest = StepSettings(dt=min(dts), contact=contact, servo=servo)
-            head = simulate(model, ref, restart, finest, *initial_state(model, ref, finest, **where))
+            head = simulate(model, ref, restart, finest, *initial_state(model, ref, finest, where))
             common = (head.q[-1], head.qd[-1])
         for dt in dts:
             start = time.perf_counter()
             step_settings = StepSettings(dt=dt, contact=contact, servo=servo)
             if common is None:
-                q0, qd0 = initial_state(model, ref, step_settings, **where)
+                q0, qd0 = initial_state(model, ref, step_settings, where)
                 traj = simulate(model, ref, duration, step_settings, q0, qd0)
             else:
                 traj = simulate(model, Shifted(ref, restart), duration - restart, step_settings, *common)

@@ -22,8 +22,8 @@ Two comparisons, each with its band stated here, before any run:
   vector difference, so length and direction both count: 10 % allows 5.7 degrees). Why 3 s:
   it is 1.5 periods of the 0.5 Hz gaits (A10), the one-period ramp and half a period at full
   amplitude, and the robot then travels 0.3-0.7 m, so the band (3-7 cm) is far above settling
-  and creep (mm); over longer runs the two integrators' differences compound. Our side costs
-  about 3 ms per 1 ms step, so its runs go to any ``concurrent.futures.Executor``.
+  and creep (mm); over longer runs the two integrators' differences compound. Our side's runs
+  go to any ``concurrent.futures.Executor``.
 * ``box_ensemble_rows``: the robot pushing the box, per gait an ensemble of starts (and friction
   scales) supplied by the caller, run in MuJoCo from the same states. The ensembles overlap
   (``ensembles_overlap``) when the lengths of the box displacements and their directions, each
@@ -45,6 +45,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..infra.validation import DEFAULT_DT
 from ..mjcf import TIMESTEP, to_mjcf
 from ..model import Model
 
@@ -234,7 +235,7 @@ def _ours_travel(name: str, gait_params: dict, duration: float, dt: float) -> di
 
 
 def robot_travel_rows(gaits, duration: float = TRAVEL_DURATION, executor=None, timestep: float = TIMESTEP,
-                      dt: float = 1e-3, params: dict | None = None) -> list[dict]:
+                      dt: float = DEFAULT_DT, params: dict | None = None) -> list[dict]:
     """For each gait, the robot alone (no box): the travel of its centre of mass over ``duration``
     in our simulator (step ``dt``) and in MuJoCo (``timestep``), from the same settled start.
 

@@ -47,9 +47,10 @@ from ..infra.executors import worker_init
 from ..params import CobraParameters
 from ..placement import TravelPlacement, travel_placement
 from ..infra.progress import progress_printer
+from ..infra.validation import DEFAULT_DT
 from ..robots import cobra_model
 from ..simulate import simulate
-from ..start import initial_state
+from ..start import BoxPlacement, initial_state
 from ..step import SimulationError, StepSettings
 from ..trajectory import Trajectory
 from .ensemble import Member
@@ -65,7 +66,7 @@ class RunSpec:
 
     gait: str
     duration: float = 10.0
-    dt: float = 1e-3
+    dt: float = DEFAULT_DT
     params: dict = field(default_factory=dict, hash=False)
     mu_robot_box: float | None = None
     member: Member | None = None
@@ -157,10 +158,9 @@ def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Traject
         placement = nominal_placement(spec)
     direction = None if placement is None else placement.direction
     member = spec.member
-    q0, qd0 = initial_state(model, ref, box_direction=direction,
-                            box_gap=0.05 if placement is None else placement.box_gap,
-                            box_shift=None if member is None else member.box_shift,
-                            box_turn=0.0 if member is None else member.box_turn)
+    q0, qd0 = initial_state(model, ref, placement=BoxPlacement(
+        gap=0.05 if placement is None else placement.box_gap, direction=direction,
+        shift=None if member is None else member.box_shift, turn=0.0 if member is None else member.box_turn))
     try:
         traj, failed = simulate(model, ref, spec.duration, StepSettings(dt=spec.dt), q0, qd0, progress=progress), False
     except SimulationError as exc:

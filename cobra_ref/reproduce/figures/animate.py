@@ -9,16 +9,15 @@ Two renderers, chosen per call of ``make``:
   backend renders offscreen (``render.choose_gl``): the bodies, the box, its path and the
   contact-force arrows of the run's log, from a camera that follows the robot, the gait's name
   and the time stamped on each frame. ``GIF_FPS`` frames per second of GIF, ``GIF_SIZE`` pixels,
-  without multisampling (``antialias=False``: about 3 times faster in a software OpenGL), and a
-  run longer than ``GIF_SECONDS`` plays faster than real time, in ``GIF_SECONDS``
-  (``playback_speed``): a 10 s run is 51 frames, about 3 s of rendering per gait with Mesa's
-  llvmpipe.
+  without multisampling (``antialias=False``: faster in a software OpenGL), and a run longer
+  than ``GIF_SECONDS`` plays faster than real time, in ``GIF_SECONDS`` (``playback_speed``): a
+  10 s run is 51 frames.
 * matplotlib, otherwise (or if the MuJoCo rendering fails): each frame the 3-D drawing of
-  :func:`cobra_ref.figures.fig03_snapshots.draw_scene` (cylinders of every body posed by forward
+  :func:`cobra_ref.viz.drawing.draw_scene` (cylinders of every body posed by forward
   kinematics, the box cube, its path on the 0.1 m ground grid; the mirrored gait seen by the
   reflected camera), evenly spaced over the run, at most ``FPS`` per simulated second and at
   most ``MAX_FRAMES`` in all (``frame_steps``), so a short run plays in real time and a 10 s run
-  has 60 frames; at 500 x 320 pixels a 60-frame GIF is about 0.6 MB.
+  has 60 frames.
 
 Which renderer made each GIF (and why not MuJoCo, if it could not) is said on stderr, one line
 per GIF, and written to ``animations.json`` beside the GIFs (``NOTE``): {GIF file name: {renderer,
@@ -36,8 +35,8 @@ import numpy as np
 from matplotlib.animation import FuncAnimation, PillowWriter
 
 from ...infra.output import write_text
+from ...viz.drawing import draw_scene, is_mirrored, scene_limits
 from . import common
-from .fig03_snapshots import draw_scene, is_mirrored, scene_limits
 
 # the matplotlib GIFs
 FPS = 12
@@ -102,14 +101,11 @@ def mujoco_problem() -> str | None:
     process, each in a short-lived subprocess).
     """
     try:
-        from ...viz import render
+        from ...viz import gl, render
     except ImportError as exc:
         return f"the MuJoCo renderer cannot be imported ({exc})"
     choice = render.choose_gl()
-    if choice["gl"] is not None:
-        return None
-    tried = choice["tried"]
-    return tried.get("mujoco") or "no OpenGL backend renders: " + "; ".join(f"{k}: {v}" for k, v in tried.items())
+    return None if choice["gl"] is not None else gl.no_gl_reason(choice)
 
 
 def mujoco_gif(gait: str, traj, path: str) -> dict:
@@ -120,9 +116,9 @@ def mujoco_gif(gait: str, traj, path: str) -> dict:
     """
     from ...viz import render
 
-    return render.render_gif(traj, path, fps=GIF_FPS, width=GIF_SIZE[0], height=GIF_SIZE[1],
-                             speed=playback_speed(traj), renderer="mujoco", title=common.gait_label(gait, traj),
-                             antialias=False)
+    video = render.VideoSettings(fps=GIF_FPS, width=GIF_SIZE[0], height=GIF_SIZE[1], speed=playback_speed(traj),
+                                 title=common.gait_label(gait, traj), antialias=False)
+    return render.render_gif(traj, path, video, renderer="mujoco")
 
 
 def matplotlib_gif(model, gait: str, traj, path: str, reason: str | None) -> dict:
