@@ -48,7 +48,7 @@ class GaitError(ValueError):
 def smoothstep(t: float, T: float):
     """r, r', r'' of r(t) = 3 s^2 - 2 s^3, s = t / T clipped to [0, 1].
 
-    Helper: the ramp-in of every gait (module docstring).
+    The ramp-in of every gait (module docstring).
     """
     if T <= 0:
         return 1.0, 0.0, 0.0
@@ -61,7 +61,7 @@ def smoothstep(t: float, T: float):
 def ramped_phase(t: float, omega: float, T: float):
     """phi - phi_0, phi', phi'' with phi' = omega r(t): the integral of the smoothstep ramp.
 
-    Helper: for t < T, phi = omega T (s^3 - s^4 / 2), s = t / T; afterwards phi grows at omega.
+    For t < T, phi = omega T (s^3 - s^4 / 2), s = t / T; afterwards phi grows at omega.
     """
     r, rd, _ = smoothstep(t, T)
     if T <= 0:
@@ -178,8 +178,6 @@ def gait(name: str, **params):
     """The gait ``name`` with its default parameters, or with ``params`` (the dataclass fields:
     amplitude, frequency, phase, ramp_time, s_J, ... ) replacing them; a clear error for an
     unknown gait or parameter.
-
-    Helper: the gait library.
     """
     if name not in GAITS:
         raise GaitError(f"unknown gait {name!r}; gaits: {', '.join(GAITS)}")
@@ -193,7 +191,5 @@ def gait(name: str, **params):
 
 def gait_params(g) -> dict:
     """The free parameters of a gait object as a JSON-ready dict (the inverse of ``gait``).
-
-    Helper: the gait library.
     """
     return {f: getattr(g, f) for f in g.__dataclass_fields__ if f != "shape"}

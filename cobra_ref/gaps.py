@@ -34,7 +34,7 @@ class Gap(NamedTuple):
 
 
 def _vec3(x, name: str) -> np.ndarray:
-    """Helper: x as a finite float (3,) array, else ValueError naming ``name``."""
+    """X as a finite float (3,) array, else ValueError naming ``name``."""
     x = np.asarray(x, dtype=float)
     if x.shape != (3,) or not np.all(np.isfinite(x)):
         raise ValueError(f"{name} must be a finite (3,) vector, got {x!r}")
@@ -42,7 +42,7 @@ def _vec3(x, name: str) -> np.ndarray:
 
 
 def _check_radius(radius) -> float:
-    """Helper: the sphere radius as a float, required finite and > 0."""
+    """The sphere radius as a float, required finite and > 0."""
     r = float(radius)
     if not (np.isfinite(r) and r > 0.0):
         raise ValueError(f"radius must be finite and > 0, got {radius!r}")
@@ -50,7 +50,7 @@ def _check_radius(radius) -> float:
 
 
 def _check_box(R_box, p_box, half) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Helper: validate a box pose (R_box a rotation within 1e-9, p_box) and positive half extents."""
+    """Validate a box pose (R_box a rotation within 1e-9, p_box) and positive half extents."""
     R = np.asarray(R_box, dtype=float)
     if R.shape != (3, 3) or not np.all(np.isfinite(R)):
         raise ValueError(f"R_box must be a finite 3x3 matrix, got shape {R.shape}")
@@ -155,8 +155,8 @@ CORNER_SIGNS = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
 def box_corners(R_box, p_box, half) -> np.ndarray:
     """The 8 world corners of a box, (8, 3), corner k = p + R (s_k * half).
 
-    Helper: the signs s_k run over itertools.product((-1, 1), repeat=3), so corner 0 is
-    (-,-,-), corner 1 is (-,-,+), ..., corner 7 is (+,+,+) in box coordinates.
+    The signs s_k run over itertools.product((-1, 1), repeat=3), so corner 0 is (-,-,-), corner 1 is
+    (-,-,+), ..., corner 7 is (+,+,+) in box coordinates.
     """
     R, p, h = _check_box(R_box, p_box, half)
     return p + (CORNER_SIGNS * h) @ R.T

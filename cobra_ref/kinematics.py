@@ -65,7 +65,7 @@ def forward_kinematics(model: Model, q, qd=None) -> Kinematics:
 def ancestors(model: Model, i: int) -> list[int]:
     """Bodies on the path from body i to the root, i first (the support of body i).
 
-    Helper: the support kappa(i) of [RBDA] sec. 4.1.
+    The support kappa(i) of [RBDA] sec. 4.1.
     """
     out = []
     while i >= 0:

@@ -134,8 +134,6 @@ UNITS: dict[str, str] = {
 
 def parameter_table(params: CobraParameters | None = None) -> list[tuple[str, object, str, str]]:
     """Rows (name, value, unit, source) for every field of ``params``.
-
-    Helper: the parameter table of cobra-ref info.
     """
     params = params or CobraParameters()
     return [(f.name, getattr(params, f.name), UNITS[f.name], SOURCES[f.name]) for f in fields(params)]

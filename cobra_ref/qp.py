@@ -1,6 +1,6 @@
 """The box-constrained QP of one least-action iterate, solved by OSQP.
 
-Helper: the one place where OSQP's own names appear. OSQP solves
+The one place where OSQP's own names appear. OSQP solves
 
     min_x 1/2 x^T P x + q^T x    s.t.  l <= A x <= u
 
@@ -43,8 +43,8 @@ class BoxQPSolution(NamedTuple):
 def solve_box_qp(H: np.ndarray, c: np.ndarray, lo: np.ndarray, hi: np.ndarray, x0=None, y0=None) -> BoxQPSolution:
     """min 1/2 x^T H x + c^T x  s.t.  lo <= x <= hi, by OSQP (module docstring); H positive definite.
 
-    Helper: one least-action iterate of [COBRA] eq. (6). Raises ``ContactSolveError`` when OSQP
-    returns neither "solved" nor "solved inaccurate".
+    One least-action iterate of [COBRA] eq. (6). Raises ``ContactSolveError`` when OSQP returns
+    neither "solved" nor "solved inaccurate".
     """
     n = len(c)
     solver = osqp.OSQP()

@@ -29,8 +29,6 @@ def quat_to_rot(quat_wxyz: np.ndarray) -> np.ndarray:
 
 def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product a * b (rotation b first, then a).
-
-    Helper: the Hamilton product (w-first).
     """
     aw, ax, ay, az = np.asarray(a, dtype=float).tolist()
     bw, bx, by, bz = np.asarray(b, dtype=float).tolist()
@@ -44,7 +42,7 @@ def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def quat_exp(rotvec: np.ndarray) -> np.ndarray:
     """Quaternion of the rotation by angle |rotvec| about rotvec/|rotvec| (exponential map).
 
-    Helper: exp(rotvec / 2) as a unit quaternion, as in MuJoCo's ``mju_quatIntegrate``.
+    Exp(rotvec / 2) as a unit quaternion, as in MuJoCo's ``mju_quatIntegrate``.
     """
     x, y, z = np.asarray(rotvec, dtype=float).tolist()
     angle = math.sqrt(x * x + y * y + z * z)
@@ -58,7 +56,7 @@ def quat_exp(rotvec: np.ndarray) -> np.ndarray:
 def rot_to_quat(R: np.ndarray) -> np.ndarray:
     """Unit quaternion (w >= 0) of a rotation matrix (Shepperd's method).
 
-    Helper: Shepperd's method, the inverse of quat_to_rot up to sign.
+    Shepperd's method, the inverse of quat_to_rot up to sign.
     """
     t = np.trace(R)
     if t > 0:

@@ -62,8 +62,6 @@ class SplineReference:
 def load_reference(path: str, q_max: float = Q_MAX) -> SplineReference:
     """Read a reference file (.npz or .csv, see the module docstring) with clear errors; every
     sample's angle within ``q_max`` [rad].
-
-    Helper: joint references for the stepper.
     """
     if not os.path.isfile(path):
         raise ReferenceError(f"reference file not found: {path}")
@@ -92,8 +90,6 @@ def builtin_reference(name: str, params: dict | None = None):
     """A built-in reference (a gait of :mod:`cobra_ref.gaits`) by name, with its defaults or with
     ``params`` = {parameter: value} replacing them; a clear error for an unknown gait, an unknown
     parameter or a value the gait refuses.
-
-    Helper: joint references for the stepper.
     """
     try:
         return gait(name, **(params or {}))
@@ -109,8 +105,8 @@ def check_reference(reference, duration: float, q_max: float = Q_MAX, qd_max: fl
     naming the joint, the time and the value), rates within ``qd_max`` [rad/s] (a list of at most
     one warning naming the joints over the limit: the speed limit is reported, not enforced, A6).
 
-    Helper: the input check of ``cobra-ref simulate``. The reference is evaluated at
-    ``CHECK_SAMPLES`` evenly spaced times and, for a file, at its own samples within the run.
+    The input check of ``cobra-ref simulate``. The reference is evaluated at ``CHECK_SAMPLES``
+    evenly spaced times and, for a file, at its own samples within the run.
     """
     times = np.linspace(0.0, float(duration), CHECK_SAMPLES)
     samples = getattr(reference, "t_samples", None)

@@ -136,8 +136,6 @@ def chain(n_links: int = 3, link_length: float = 0.3, link_mass: float = 1.0, ra
     Joints alternate Rz, Ry, Rz, ... like COBRA; link i's frame is at its joint, the cylinder
     extends along -x (the same layout as COBRA's links), one sphere per link at the far end.
     Used by the tutorials and tests as "the smallest model that shows the fact".
-
-    Helper: model factories.
     """
     I_rod = np.diag([0.5 * link_mass * radius**2] + [link_mass * (3 * radius**2 + link_length**2) / 12] * 2)
     names = tuple(f"link{i}" for i in range(n_links))
@@ -169,8 +167,6 @@ def chain(n_links: int = 3, link_length: float = 0.3, link_mass: float = 1.0, ra
 
 def neutral_q(model: Model) -> np.ndarray:
     """Zero joint angles, identity quaternions, free bodies at the origin.
-
-    Helper: model factories.
     """
     q = np.zeros(model.nq)
     for i, jt in enumerate(model.joint_type):
@@ -181,8 +177,6 @@ def neutral_q(model: Model) -> np.ndarray:
 
 def random_state(model: Model, rng: np.random.Generator, scale: float = 1.0):
     """A random valid (q, qd): random unit quaternions, joint angles within their limits.
-
-    Helper: model factories.
     """
     q = np.zeros(model.nq)
     for i, jt in enumerate(model.joint_type):

@@ -37,7 +37,7 @@ def skew(w: np.ndarray) -> np.ndarray:
 def skew_rows(w: np.ndarray) -> np.ndarray:
     """(k, 3, 3) skew matrices [w_i]x of the rows of w (k, 3): skew_rows(w)[i] @ v = w_i x v.
 
-    Helper: the batched :func:`skew` of the world-frame fast paths.
+    The batched :func:`skew` of the world-frame fast paths.
     """
     out = np.zeros((len(w), 3, 3))
     out[:, 0, 1], out[:, 0, 2] = -w[:, 2], w[:, 1]
@@ -49,8 +49,7 @@ def skew_rows(w: np.ndarray) -> np.ndarray:
 def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise cross product a x b of (..., 3) arrays, broadcasting like numpy.
 
-    Helper: the batched 3-D cross product of the world-frame fast paths (np.cross is slow
-    for small arrays).
+    The batched 3-D cross product of the world-frame fast paths (np.cross is slow for small arrays).
     """
     return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
                      a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
@@ -176,7 +175,6 @@ def mcI(m: float, c: np.ndarray, I_c: np.ndarray) -> np.ndarray:
 def swap_lin_ang(x: np.ndarray) -> np.ndarray:
     """Swap the two 3-blocks of a spatial vector (or the rows of a 6xN matrix).
 
-    Helper: the only conversion between cobra_ref's angular-first vectors and Pinocchio's
-    linear-first ones.
+    The only conversion between cobra_ref's angular-first vectors and Pinocchio's linear-first ones.
     """
     return np.concatenate([x[3:6], x[0:3]], axis=0)

@@ -1,8 +1,8 @@
 """The record of a simulation: states, torques, per-step solver and energy records, the contact log.
 
-Helper: what ``simulate`` returns and ``cobra-ref simulate`` writes (NPZ, every array named;
-numpy users open it with ``np.load``). Arrays of length N + 1 hold states (one per time t_k),
-arrays of length N hold steps (from t_k to t_k+1):
+What ``simulate`` returns and ``cobra-ref simulate`` writes (NPZ, every array named; numpy users
+open it with ``np.load``). Arrays of length N + 1 hold states (one per time t_k), arrays of length N
+hold steps (from t_k to t_k+1):
 
 * ``t``, ``q``, ``qd``, ``box_pose`` (x y z qw qx qy qz); ``tau`` (N, n_joints) joint torques;
 * per step (``STEP_KEYS``): the friction fixed point (``fp_converged`` 1/0, ``fp_iter`` iterates,
@@ -63,7 +63,7 @@ class Trajectory:
     def summary(self) -> dict:
         """The one-line JSON summary of ``cobra-ref simulate``.
 
-        Helper: the box's displacement, the worst contact conditions, the friction fixed point's
+        The box's displacement, the worst contact conditions, the friction fixed point's
         convergence, the largest torque, speed.
         """
         s = self.steps
@@ -86,8 +86,8 @@ class Trajectory:
         """The first ``duration`` seconds: the states up to step n = round(duration / dt), the
         steps before it and the contact rows of those steps; the whole trajectory if it is shorter.
 
-        Helper: an ensemble's members judged over one common window. ``wall_time`` is scaled by
-        the share of steps kept; ``error`` is kept only when the failure lies within the window.
+        An ensemble's members judged over one common window. ``wall_time`` is scaled by the share of
+        steps kept; ``error`` is kept only when the failure lies within the window.
         """
         if not (np.isfinite(duration) and duration > 0):
             raise ValueError(f"duration must be positive and finite, got {duration}")
@@ -105,7 +105,7 @@ class Trajectory:
     def from_npz(cls, path: str) -> "Trajectory":
         """Read back what ``to_npz`` wrote.
 
-        Helper: the cache of the figure runs, and users' own analysis.
+        The cache of the figure runs, and users' own analysis.
         """
         with np.load(path, allow_pickle=False) as z:
             return cls(float(z["dt"]), z["t"], z["q"], z["qd"], z["tau"], z["box_pose"],
@@ -117,7 +117,7 @@ class Trajectory:
         stays ``run``), atomically: a temporary file renamed onto the target, never half-written
         (:mod:`cobra_ref.infra.output`; ``OutputError`` for a directory, a device or a missing directory).
 
-        Helper: ``cobra-ref simulate --out`` and the figure runs' cache.
+        ``cobra-ref simulate --out`` and the figure runs' cache.
         """
         arrays = dict(t=self.t, q=self.q, qd=self.qd, tau=self.tau, box_pose=self.box_pose, dt=np.array(self.dt),
                       wall_time=np.array(self.wall_time),

@@ -32,8 +32,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     """Entry point of ``cobra-ref``: parse, then run the subcommand.
-
-    Helper: the command line (cobra-ref).
     """
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -26,8 +26,6 @@ from ..infra.progress import progress_printer
 
 def fail(message) -> SystemExit:
     """The ``SystemExit`` that prints ``error: MESSAGE`` and exits with status 1 (raise it).
-
-    Helper: shared by every cobra-ref subcommand.
     """
     return SystemExit(f"error: {message}")
 
@@ -35,7 +33,7 @@ def fail(message) -> SystemExit:
 def check_out(path, what: str = "--out") -> str:
     """``output.check_output`` for a command: the checked path, or exit with the reason.
 
-    Helper: shared by every cobra-ref subcommand (before the long run).
+    Shared by every cobra-ref subcommand (before the long run).
     """
     try:
         check_output(path, what)
@@ -46,16 +44,12 @@ def check_out(path, what: str = "--out") -> str:
 
 def check_writable(path: str) -> None:
     """Exit with a clear error if ``path`` cannot be written (``check_out``).
-
-    Helper: shared by every cobra-ref subcommand.
     """
     check_out(path, "output")
 
 
 def write_text_atomic(path: str, text: str, what: str = "output") -> None:
     """Check the target (a clear error), then write through a temporary file and a rename.
-
-    Helper: shared by every cobra-ref subcommand.
     """
     from ..infra.output import write_text
 
@@ -72,8 +66,6 @@ def c_stdout_silenced():
     "Polishing not needed ..." once per solve even with verbose off, thousands of lines per run.
     stdout then carries only the command's own output (its JSON line, printed after the block);
     progress goes to stderr.
-
-    Helper: shared by every cobra-ref subcommand.
     """
     sys.stdout.flush()
     saved, devnull = os.dup(1), os.open(os.devnull, os.O_WRONLY)
@@ -90,7 +82,7 @@ def c_stdout_silenced():
 def failed_path(out: str) -> str:
     """Where a run that fails part-way is kept: ``OUT`` without its extension + ``.failed.npz``.
 
-    Helper: shared by every cobra-ref subcommand (``run.npz`` -> ``run.failed.npz``, ``run`` ->
+    Shared by every cobra-ref subcommand (``run.npz`` -> ``run.failed.npz``, ``run`` ->
     ``run.failed.npz``).
     """
     return os.path.splitext(out)[0] + ".failed.npz"
@@ -160,8 +152,6 @@ def run_and_write(job: Job, out: str, label: str, quiet: bool = False, meta=None
 
 def finite_float(text: str) -> float:
     """argparse type: a float, rejected if not finite (the message names the value).
-
-    Helper: shared by every cobra-ref subcommand.
     """
     try:
         value = float(text)
@@ -175,8 +165,6 @@ def finite_float(text: str) -> float:
 def gait_param(text: str) -> tuple:
     """argparse type: ``NAME=VALUE``, a gait parameter and a finite number (the gait checks its
     range when the reference is built).
-
-    Helper: ``--param`` of cobra-ref simulate.
     """
     from ..infra.validation import RULES, ValidationError
 
@@ -200,8 +188,6 @@ MODEL_PARAMETERS = ("mu", "mu_robot_box", "mu_box_ground", "box_mass")
 
 def add_model_options(p) -> None:
     """--mu, --mu-robot-box, --mu-box-ground and --box-mass on parser ``p``.
-
-    Helper: the command line (cobra-ref simulate, optimize).
     """
     from ..infra.validation import RULES
 
@@ -217,8 +203,6 @@ def add_model_options(p) -> None:
 
 def model_parameters(args):
     """``CobraParameters`` with the model options given on the command line (``add_model_options``).
-
-    Helper: the command line (cobra-ref simulate, optimize).
     """
     from ..params import CobraParameters
 

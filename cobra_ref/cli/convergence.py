@@ -1,6 +1,4 @@
 """``cobra-ref convergence``: one gait at dt = 2, 1, 0.5, 0.25 ms, for both contact models.
-
-Helper: the command-line side of :mod:`cobra_ref.reproduce.convergence`.
 """
 
 from __future__ import annotations
@@ -14,8 +12,6 @@ from .common import c_stdout_silenced, check_out, fail, write_text_atomic
 
 def cmd_convergence(args) -> int:
     """Run the study, print its table, write it as JSON.
-
-    Helper: the command line (cobra-ref convergence).
     """
     from ..reproduce.convergence import DTS, SETTINGS, changes, check_restart, format_table, study
 
@@ -43,8 +39,6 @@ def cmd_convergence(args) -> int:
 
 def add_parsers(sub) -> None:
     """The ``convergence`` subcommand.
-
-    Helper: the command line (cobra-ref convergence).
     """
     from ..gaits import GAITS
 

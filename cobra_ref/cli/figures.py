@@ -1,6 +1,4 @@
 """``cobra-ref figures``: every result of the paper (figures 3-9, GIFs, claims) in one command.
-
-Helper: the command-line side of :mod:`cobra_ref.reproduce.regenerate`.
 """
 
 from __future__ import annotations
@@ -15,8 +13,6 @@ from ..infra.validation import RULES
 
 def cmd_figures(args) -> int:
     """Regenerate figures 3-9, the GIFs and the claims report.
-
-    Helper: the command line (cobra-ref figures).
     """
     from ..reproduce.regenerate import OPTIMIZED_DIR, FiguresOptions, check_output_dir, regenerate
     from ..reproduce.runs import PAPER_GAITS
@@ -67,9 +63,9 @@ def check_report(committed: list, regenerated: list) -> int:
     """Exit status of ``--check``: 0 when the regenerated claims agree with the committed ones
     (``reproduce.check.compare_claims``), 1 otherwise, with the table of mismatches on stderr.
 
-    Helper: the command line (cobra-ref figures --check). When this run made no MuJoCo comparison
-    (mujoco is an optional extra, or ``--no-mujoco``), the committed MuJoCo claims are left out of
-    the comparison and a note says so.
+    The command line (cobra-ref figures --check). When this run made no MuJoCo comparison (mujoco is
+    an optional extra, or ``--no-mujoco``), the committed MuJoCo claims are left out of the
+    comparison and a note says so.
     """
     from ..reproduce.check import compare_claims, mismatch_table
 
@@ -91,8 +87,6 @@ def check_report(committed: list, regenerated: list) -> int:
 
 def add_parsers(sub) -> None:
     """The ``figures`` subcommand.
-
-    Helper: the command line (cobra-ref figures).
     """
     p = sub.add_parser("figures", help="regenerate the paper's figures 3-9, GIFs and the claims report",
                        description="Simulate the five gaits, each as an ensemble of --members runs (member 0: 10 s, "

@@ -1,7 +1,6 @@
 """``cobra-ref info`` and ``cobra-ref export-mjcf``: the model as a table with its sources, and as MJCF.
 
-Helper: the command-line side of :mod:`cobra_ref.params`, :mod:`cobra_ref.robots` and
-:mod:`cobra_ref.mjcf`.
+The command-line side of :mod:`cobra_ref.params`, :mod:`cobra_ref.robots` and :mod:`cobra_ref.mjcf`.
 """
 
 from __future__ import annotations
@@ -21,8 +20,6 @@ _AXIS_NAME = {"Rx": "roll (x)", "Ry": "pitch (y)", "Rz": "yaw (z)", "free": "fre
 
 def cmd_info(args) -> int:
     """Print the model: bodies, masses, inertias, joints, limits, length, each with its source.
-
-    Helper: the command line (cobra-ref info, export-mjcf).
     """
     params = CobraParameters()
     model = cobra_model(params)
@@ -54,8 +51,6 @@ def cmd_info(args) -> int:
 def cmd_export_mjcf(args) -> int:
     """Write the COBRA + box scene as MJCF (atomically: nothing half-written on failure; through a
     symbolic link to its target; a directory or a device is refused, see :mod:`cobra_ref.infra.output`).
-
-    Helper: the command line (cobra-ref info, export-mjcf).
     """
     from ..mjcf import to_mjcf
 
@@ -68,8 +63,6 @@ def cmd_export_mjcf(args) -> int:
 
 def add_parsers(sub) -> None:
     """The ``info`` and ``export-mjcf`` subcommands.
-
-    Helper: the command line (cobra-ref info, export-mjcf).
     """
     p = sub.add_parser("info", help="print the model with the source of every number")
     p.set_defaults(func=cmd_info)

@@ -94,7 +94,7 @@ def add_parsers(sub) -> None:
 def cmd_optimize(args) -> int:
     """Run the optimization, write the params JSON, print the summary (stderr) and one JSON line.
 
-    Helper: ``cobra-ref optimize``. Exit status 0, or 130 after Ctrl-C (the file is still written).
+    ``cobra-ref optimize``. Exit status 0, or 130 after Ctrl-C (the file is still written).
     """
     check_writable(args.out)
     if args.workers is not None and args.workers < 1:

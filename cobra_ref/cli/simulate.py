@@ -117,8 +117,6 @@ def _options(args, duration: float) -> dict:
 
 def gait_name(text: str) -> str:
     """argparse type: a built-in gait's name (``gaits.GAITS``).
-
-    Helper: the command line (cobra-ref simulate).
     """
     if text not in GAITS:
         raise argparse.ArgumentTypeError(f"unknown gait {text!r}; gaits: {', '.join(GAITS)}")
@@ -207,7 +205,7 @@ def cmd_simulate_params(args) -> int:
 def params_summary(run: ParamsRun, traj) -> dict:
     """The replayed cost next to the recorded one (when the horizon is the optimization's).
 
-    Helper: extra keys for the JSON line of ``cobra-ref simulate --params``.
+    Extra keys for the JSON line of ``cobra-ref simulate --params``.
     """
     if run.duration != run.problem.duration or len(traj.tau) != round(run.problem.duration / run.problem.dt):
         return {"params_cost": None, "note": "horizon differs from the optimization's: cost not comparable"}

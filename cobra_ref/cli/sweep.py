@@ -1,6 +1,4 @@
 """``cobra-ref sweep``: the contact solve's reliability over randomized scenarios.
-
-Helper: the command-line side of :mod:`cobra_ref.reproduce.sweep`.
 """
 
 from __future__ import annotations
@@ -15,8 +13,6 @@ from .common import c_stdout_silenced, check_out, fail, write_text_atomic
 
 def cmd_sweep(args) -> int:
     """Run the sweep on the local cores, print the summary, write every record as JSON.
-
-    Helper: the command line (cobra-ref sweep).
     """
     from ..infra.executors import default_executor
     from ..reproduce.sweep import format_summary, run_scenario, scenarios, summarize
@@ -52,8 +48,6 @@ def cmd_sweep(args) -> int:
 
 def add_parsers(sub) -> None:
     """The ``sweep`` subcommand.
-
-    Helper: the command line (cobra-ref sweep).
     """
     p = sub.add_parser("sweep", help="reliability of the contact solve over randomized scenarios",
                        description="Draws N scenarios from a seed (gait parameters within the optimizer's bounds, "

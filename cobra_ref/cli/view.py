@@ -1,9 +1,9 @@
 """``cobra-ref view`` and ``cobra-ref render``: see a saved run in MuJoCo's viewer, or render it to
 a still, a GIF or an MP4.
 
-Helper: the command-line side of :mod:`cobra_ref.viz`. Both read the NPZ of ``cobra-ref
-simulate --out RUN.npz``. ``render`` prints one JSON line (what was written, by which renderer
-and OpenGL backend, how long it took) on stdout and its progress on stderr.
+The command-line side of :mod:`cobra_ref.viz`. Both read the NPZ of ``cobra-ref simulate --out
+RUN.npz``. ``render`` prints one JSON line (what was written, by which renderer and OpenGL backend,
+how long it took) on stdout and its progress on stderr.
 """
 
 from __future__ import annotations
@@ -17,8 +17,6 @@ from .common import check_out
 
 def read_run(path: str):
     """The run at ``path``, or a clear error.
-
-    Helper: the command line (cobra-ref view, render).
     """
     from ..viz.scene import RunError, load_run
 
@@ -33,8 +31,6 @@ def read_run(path: str):
 
 def cmd_view(args) -> int:
     """Replay a run in MuJoCo's interactive viewer.
-
-    Helper: the command line (cobra-ref view).
     """
     from ..viz import view
 
@@ -60,8 +56,6 @@ def cmd_view(args) -> int:
 
 def cmd_render(args) -> int:
     """Render a run offscreen to a PNG still, a GIF or an MP4.
-
-    Helper: the command line (cobra-ref render).
     """
     from ..infra.progress import progress_printer
     from ..viz.render import RenderError, VideoSettings, output_format, render_file
@@ -92,8 +86,6 @@ def cmd_render(args) -> int:
 
 def add_parsers(sub) -> None:
     """The ``view`` and ``render`` subcommands.
-
-    Helper: the command line (cobra-ref view, render).
     """
     from ..viz.scene import FORCE_SCALE
 

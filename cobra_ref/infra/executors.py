@@ -1,8 +1,8 @@
 """Where independent simulations run: worker processes, a serial executor, and their shutdown.
 
-Helper: shared by the figure command's gait runs (``reproduce``) and the shooting optimizer
-(``planning``). Anything that is a ``concurrent.futures.Executor`` (a process pool, the serial
-executor, a Dask client's executor) can run the rollouts; the results do not depend on it.
+Shared by the figure command's gait runs (``reproduce``) and the shooting optimizer (``planning``).
+Anything that is a ``concurrent.futures.Executor`` (a process pool, the serial executor, a Dask
+client's executor) can run the rollouts; the results do not depend on it.
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from concurrent.futures import Executor, Future, ProcessPoolExecutor
 def _openblas_libraries() -> list:
     """(path, set_num_threads, get_num_threads) of every OpenBLAS loaded in this process (Linux).
 
-    Helper: numpy's and scipy's bundled OpenBLAS, found in /proc/self/maps; elsewhere, or without
-    OpenBLAS, [].
+    Numpy's and scipy's bundled OpenBLAS, found in /proc/self/maps; elsewhere, or without OpenBLAS,
+    [].
     """
     import ctypes
     import re
@@ -49,10 +49,10 @@ def _openblas_libraries() -> list:
 def limit_blas_threads(n: int = 1) -> list[str]:
     """Ask every OpenBLAS library loaded in this process to use ``n`` threads; return their paths.
 
-    Helper: a contact step works on 23 x 23 matrices, where OpenBLAS's threads cost far more than
-    they save, above all on a shared machine (measured on the 2-core machine with other jobs
-    running: a 2 s rollout took 17.0 ms per step with OpenBLAS's default threads and 4.6 ms with
-    one, with bit-identical results).
+    A contact step works on 23 x 23 matrices, where OpenBLAS's threads cost far more than they save,
+    above all on a shared machine (measured on the 2-core machine with other jobs running: a 2 s
+    rollout took 17.0 ms per step with OpenBLAS's default threads and 4.6 ms with one, with
+    bit-identical results).
     """
     import ctypes
 
@@ -66,8 +66,8 @@ def limit_blas_threads(n: int = 1) -> list[str]:
 def one_blas_thread():
     """Run the ``with`` block with one OpenBLAS thread, then restore each library's thread count.
 
-    Helper: used by ``simulate`` so that a script calling it directly runs as fast as the command
-    line (which limits the threads once for the whole process).
+    Used by ``simulate`` so that a script calling it directly runs as fast as the command line
+    (which limits the threads once for the whole process).
     """
     import ctypes
 
@@ -85,9 +85,9 @@ def one_blas_thread():
 def worker_init() -> None:
     """Pool worker initializer.
 
-    Helper: one BLAS thread; Ctrl-C goes to the main process only, which ends
-    the workers; file descriptor 1 to /dev/null (OSQP prints "Polishing not needed ..." there even
-    with verbose off, once per solve; the workers print nothing else)."""
+    One BLAS thread; Ctrl-C goes to the main process only, which ends the workers; file descriptor 1
+    to /dev/null (OSQP prints "Polishing not needed ..." there even with verbose off, once per
+    solve; the workers print nothing else)."""
     limit_blas_threads(1)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     devnull = os.open(os.devnull, os.O_WRONLY)
@@ -98,7 +98,7 @@ def worker_init() -> None:
 class SerialExecutor(Executor):
     """An Executor that runs each call at once in this process (tests, debugging, a single core).
 
-    Helper: same results as a process pool, one rollout at a time.
+    Same results as a process pool, one rollout at a time.
     """
 
     def submit(self, fn, /, *args, **kwargs):
@@ -113,8 +113,6 @@ class SerialExecutor(Executor):
 def default_executor(workers: int | None = None) -> ProcessPoolExecutor:
     """A process pool on the local cores (``os.cpu_count()`` workers), one BLAS thread per worker,
     ignoring Ctrl-C (``optimize`` ends them).
-
-    Helper: the default executor of ``optimize``.
     """
     return ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1, initializer=worker_init)
 
@@ -124,7 +122,7 @@ def own_pool(workers: int | None = None):
     """``default_executor(workers)`` for a ``with`` block, shut down on leaving it: waiting for its
     work after a normal exit, its workers ended at once after an exception (Ctrl-C included).
 
-    Helper: a pool that is made and ended in one place (``shutdown``).
+    A pool that is made and ended in one place (``shutdown``).
     """
     executor = default_executor(workers)
     try:
@@ -137,8 +135,6 @@ def own_pool(workers: int | None = None):
 
 def shutdown(executor: Executor, interrupted: bool) -> None:
     """Shut down our own pool; after Ctrl-C, end its worker processes (they ignore SIGINT) at once.
-
-    Helper: where independent simulations run.
     """
     if interrupted:
         # the pool's own worker processes (a private attribute of ProcessPoolExecutor)

@@ -50,9 +50,9 @@ def resolve_output(path, what: str = "output") -> str:
     """The file that writing ``path`` must replace: ``path`` itself, or the end of its symbolic
     links; an ``OutputError`` if it cannot be a regular file there (checks without writing).
 
-    Helper: safe output (module docstring). Refuses an empty or non-text name, a name ending in
-    a path separator, a target that exists and is not a regular file (directory, device, pipe,
-    socket), a symbolic-link loop and a missing parent directory.
+    Safe output (module docstring). Refuses an empty or non-text name, a name ending in a path
+    separator, a target that exists and is not a regular file (directory, device, pipe, socket), a
+    symbolic-link loop and a missing parent directory.
     """
     if isinstance(path, os.PathLike):
         path = os.fspath(path)
@@ -84,9 +84,9 @@ def resolve_output(path, what: str = "output") -> str:
 def check_output(path, what: str = "output") -> str:
     """Check before a long run that ``path`` can be written; return the file that will be written.
 
-    Helper: safe output (module docstring). ``resolve_output``'s checks, then a probe: a temporary
-    file is created in the target's directory and removed (``OutputError`` naming the directory
-    and the system's reason if that fails).
+    Safe output (module docstring). ``resolve_output``'s checks, then a probe: a temporary file is
+    created in the target's directory and removed (``OutputError`` naming the directory and the
+    system's reason if that fails).
     """
     target = resolve_output(path, what)
     directory = os.path.dirname(target)
@@ -104,10 +104,10 @@ def atomic_write(path, write, what: str = "output") -> None:
     """Call ``write(tmp_path)``, where ``tmp_path`` has the target's own file name inside a private
     temporary directory beside it, then rename that file onto the target (module docstring).
 
-    Helper: safe output. The writer may choose the format by the name's extension; if it writes
-    under another name (numpy's ``np.save``/``np.savez`` append a suffix), nothing is replaced and
-    an ``OutputError`` says so. The file gets the permissions of an ordinary new file. The
-    temporary directory is removed on success and on every failure (the error is re-raised).
+    Safe output. The writer may choose the format by the name's extension; if it writes under
+    another name (numpy's ``np.save``/``np.savez`` append a suffix), nothing is replaced and an
+    ``OutputError`` says so. The file gets the permissions of an ordinary new file. The temporary
+    directory is removed on success and on every failure (the error is re-raised).
     """
     target = resolve_output(path, what)
     directory = os.path.dirname(target)
@@ -131,7 +131,7 @@ def atomic_write(path, write, what: str = "output") -> None:
 def write_text(path, text: str, what: str = "output") -> None:
     """Write ``text`` to ``path`` atomically (UTF-8).
 
-    Helper: safe text output (claims, summaries, MJCF, JSON).
+    Safe text output (claims, summaries, MJCF, JSON).
     """
 
     def write(tmp):
@@ -144,8 +144,8 @@ def write_text(path, text: str, what: str = "output") -> None:
 def write_binary(path, write_file, what: str = "output") -> None:
     """Write ``path`` atomically through a binary file object: ``write_file(f)`` fills it.
 
-    Helper: safe output for writers that would change a name (``np.savez(f, ...)`` given a file
-    object writes exactly there, nothing appended).
+    Safe output for writers that would change a name (``np.savez(f, ...)`` given a file object
+    writes exactly there, nothing appended).
     """
 
     def write(tmp):

@@ -10,7 +10,7 @@ def progress_printer(label: str):
     """A ``progress(done, total)`` callback that rewrites one stderr line: label, percentage,
     steps done, and the time left extrapolated from the time so far.
 
-    Helper: passed to ``simulate(..., progress=...)`` by the commands and the figure runs.
+    Passed to ``simulate(..., progress=...)`` by the commands and the figure runs.
     """
     start = time.perf_counter()
 

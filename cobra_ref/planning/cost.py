@@ -19,8 +19,8 @@ BOX_PATH_DT = 0.01  # [s] spacing of the box path kept with each rollout (the op
 def robot_weight(model) -> float:
     """m_robot g [N]: the robot's weight (every body that is not a box) under the model's gravity.
 
-    Helper: the scale of the impact term (``impact_term``); 12 bodies (head, 10 links, tail)
-    x 0.5 kg x 9.81 m/s^2 = 58.86 N for COBRA.
+    The scale of the impact term (``impact_term``); 12 bodies (head, 10 links, tail) x 0.5 kg x 9.81
+    m/s^2 = 58.86 N for COBRA.
     """
     boxes = {b.body for b in model.boxes}
     mass = sum(m for i, m in enumerate(model.mass) if i not in boxes)

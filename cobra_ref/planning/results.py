@@ -1,7 +1,7 @@
 """The params JSON of an optimization: the optimum, every rollout, every setting; its replay.
 
-Helper: the output of ``cobra-ref optimize`` and the input of ``cobra-ref simulate --params``
-and of the figures.
+The output of ``cobra-ref optimize`` and the input of ``cobra-ref simulate --params`` and of the
+figures.
 """
 
 from __future__ import annotations
@@ -210,8 +210,6 @@ def transfer(problem: ShootingProblem, x, plan_entry: dict | None = None, check_
 
 def result_to_dict(result: ShootingResult) -> dict:
     """The params JSON: ``params`` (the optimum), ``history``, and every setting to re-run it.
-
-    Helper: the output of ``cobra-ref optimize``.
     """
     best = result.best
     path = best.get("box_path")
@@ -253,8 +251,6 @@ def impact_comparison(result) -> dict | None:
 
 def write_result(result: ShootingResult, path: str) -> dict:
     """Write the params JSON atomically (temporary file + rename); return what was written.
-
-    Helper: ``cobra-ref optimize --out``.
     """
     record = result_to_dict(result)
 
@@ -270,8 +266,6 @@ def write_result(result: ShootingResult, path: str) -> dict:
 def load_result(path: str) -> dict:
     """Read a params JSON with clear errors (missing, not JSON, not ours, malformed settings,
     parameters the gait refuses or outside the optimization's bounds).
-
-    Helper: ``cobra-ref simulate --params`` and the figures.
     """
     from ..infra.validation import is_number
 
@@ -329,8 +323,6 @@ def load_result(path: str) -> dict:
 
 def decision_vector(problem: ShootingProblem, params: dict) -> tuple:
     """x for the full gait parameters ``params`` (the decision parameters picked out).
-
-    Helper: replay.
     """
     return tuple(float(params[n]) for n in problem.names)
 
@@ -338,7 +330,7 @@ def decision_vector(problem: ShootingProblem, params: dict) -> tuple:
 def replay(path: str, progress=None) -> tuple[Trajectory, dict]:
     """Re-run the optimum of a params JSON; return the trajectory and its cost entry.
 
-    Helper: the exact replay (the simulator is deterministic: the cost equals the recorded one).
+    The exact replay (the simulator is deterministic: the cost equals the recorded one).
     """
     record = load_result(path)
     problem = record["problem"]
@@ -349,8 +341,6 @@ def replay(path: str, progress=None) -> tuple[Trajectory, dict]:
 
 def summary_lines(result: ShootingResult) -> list[str]:
     """The final summary of an optimization, a few lines of text.
-
-    Helper: printed on stderr by ``cobra-ref optimize``.
     """
     p, b, x0 = result.problem, result.best, result.history[0]
     c = b.get("contact") or {}

@@ -25,7 +25,7 @@ from .results import CHECK_DT, transfer, write_result
 class ShootingResult:
     """The outcome of ``optimize``: the best rollout, every rollout, and how the run ended.
 
-    Helper: written to JSON by ``result_to_dict`` / ``write_result``.
+    Written to JSON by ``result_to_dict`` / ``write_result``.
     """
 
     problem: ShootingProblem

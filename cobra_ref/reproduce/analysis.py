@@ -41,8 +41,6 @@ PHASE_REFERENCE_JOINT = 0  # J0, the head's joint (the paper's joint 1, numberin
 
 def joint_rates(traj) -> np.ndarray:
     """(N, 11) joint velocities at each step's midpoint, (u_k + u_k+1) / 2.
-
-    Helper: the qdot_j of assumption A18.
     """
     qd = traj.qd[:, JOINT_VELOCITIES]
     return 0.5 * (qd[:-1] + qd[1:])
@@ -68,7 +66,7 @@ def locomotion_work(traj) -> np.ndarray:
 def box_point_velocity(traj, steps: np.ndarray, points: np.ndarray) -> np.ndarray:
     """(n, 3) world velocity of the box at world points ``points`` at the midpoints of ``steps``.
 
-    Helper: v_box(p) = v + R omega_body x (p - x_box), with the box pose at the step's start.
+    V_box(p) = v + R omega_body x (p - x_box), with the box pose at the step's start.
     """
     qd_box = 0.5 * (traj.qd[steps, -6:] + traj.qd[steps + 1, -6:])
     pose = traj.box_pose[steps]
@@ -80,8 +78,8 @@ def box_point_velocity(traj, steps: np.ndarray, points: np.ndarray) -> np.ndarra
 def contact_power_on_box(traj, kind: int) -> np.ndarray:
     """(N,) power [W] of the contacts of ``kind`` on the box, sum_c f_c . v_box(p_c).
 
-    Helper: for robot-box contacts the force on the box is minus the logged force (which acts on
-    the robot link); for box-ground contacts the box is body A and the logged force acts on it.
+    For robot-box contacts the force on the box is minus the logged force (which acts on the robot
+    link); for box-ground contacts the box is body A and the logged force acts on it.
     """
     c = traj.contacts
     rows = np.flatnonzero(c["contact_kind"] == kind)
@@ -111,8 +109,8 @@ def box_distance(traj) -> np.ndarray:
 def percentile_99(values, empty: float = 0.0) -> float:
     """The 99th percentile of ``values`` (flattened), or ``empty`` when there are none.
 
-    Helper: the robust peak reported beside each maximum (``summary``; the annotations of figs. 7
-    and 8). For the n values sorted, s_0 <= ... <= s_{n-1}, the rank r = 0.99 (n - 1) and::
+    The robust peak reported beside each maximum (``summary``; the annotations of figs. 7 and 8).
+    For the n values sorted, s_0 <= ... <= s_{n-1}, the rank r = 0.99 (n - 1) and::
 
         p99 = s_i + (r - i) (s_{i+1} - s_i),   i = floor(r)
 
@@ -128,10 +126,10 @@ def efficiency_fit(traj) -> tuple[float, float]:
     the samples from the first robot-box contact on; (inf, nan) when the robot does no work on
     the box.
 
-    Helper: the number behind the paper's "more efficient gaits need less work in locomotion to
-    do more work on the box" (fig. 6): the slope is the locomotion work spent per joule done on
-    the box while pushing [J/J], lower = more efficient. The intercept absorbs the locomotion
-    work spent before the robot reaches the box, which is not the push's cost.
+    The number behind the paper's "more efficient gaits need less work in locomotion to do more work
+    on the box" (fig. 6): the slope is the locomotion work spent per joule done on the box while
+    pushing [J/J], lower = more efficient. The intercept absorbs the locomotion work spent before
+    the robot reaches the box, which is not the push's cost.
     """
     w_loc, w_box = locomotion_work(traj), box_work(traj)
     touching = np.flatnonzero(traj.contacts["contact_kind"] == ROBOT_BOX)
@@ -149,7 +147,7 @@ def efficiency_fit(traj) -> tuple[float, float]:
 def efficiency_slope(traj) -> float:
     """The slope of ``efficiency_fit`` [J/J]: locomotion work per joule done on the box.
 
-    Helper: fig. 6's inefficiency, one number per gait.
+    Fig. 6's inefficiency, one number per gait.
     """
     return efficiency_fit(traj)[0]
 
@@ -178,9 +176,9 @@ def impacts(traj) -> dict:
 def robot_weight(params: CobraParameters | None = None) -> float:
     """The robot's weight m g [N], the box excluded.
 
-    Helper: the scale of the non-impulsive claim. m is the robot's total mass from
-    ``CobraParameters`` (head, the ``n_body_links`` links and tail: 12 x 0.5 kg = 6 kg by default,
-    the paper's "each link ... weighing 0.5 kg"), g its ``gravity`` (assumption A20).
+    The scale of the non-impulsive claim. m is the robot's total mass from ``CobraParameters``
+    (head, the ``n_body_links`` links and tail: 12 x 0.5 kg = 6 kg by default, the paper's "each
+    link ... weighing 0.5 kg"), g its ``gravity`` (assumption A20).
     """
     p = params or CobraParameters()
     return float((p.mass_head + p.n_body_links * p.mass_link + p.mass_tail) * p.gravity)
@@ -189,7 +187,7 @@ def robot_weight(params: CobraParameters | None = None) -> float:
 def gait_period(traj) -> float:
     """The gait's period 1 / f [s] from ``traj.meta["gait_params"]["frequency"]``; nan without it.
 
-    Helper: the lag window of ``joint_phase_correlation`` (assumption A10's f).
+    The lag window of ``joint_phase_correlation`` (assumption A10's f).
     """
     f = (traj.meta or {}).get("gait_params", {}).get("frequency")
     return 1.0 / float(f) if f else float("nan")
@@ -200,7 +198,7 @@ def steady_start(traj) -> float:
     ramp, ``ramp_time`` of the trajectory's gait parameters, or one period when it is None (the
     gait library's default); nan when the trajectory carries no gait parameters.
 
-    Helper: the window of ``power_cv`` and ``joint_phase_correlation`` (``gaits`` module docstring).
+    The window of ``power_cv`` and ``joint_phase_correlation`` (``gaits`` module docstring).
     """
     gp = (traj.meta or {}).get("gait_params", {})
     if gp.get("ramp_time") is not None:
@@ -335,9 +333,9 @@ def contact_forces(traj, kind: int, n_bodies: int) -> ContactForces:
 def summary(traj) -> dict:
     """The numbers the claims report needs, from one trajectory (JSON-ready floats).
 
-    Helper: W_loc(T), W_box(T), the efficiency slope, peak and mean |P_loc|, the box's
-    displacement and distance, and the run's health (robot-box steps, torque excess, the share
-    of steps whose friction fixed point converged), plus ``impacts``.
+    W_loc(T), W_box(T), the efficiency slope, peak and mean |P_loc|, the box's displacement and
+    distance, and the run's health (robot-box steps, torque excess, the share of steps whose
+    friction fixed point converged), plus ``impacts``.
 
     Beside each maximum, the 99th percentile of the same samples (``percentile_99``), which a
     single spike does not move:
@@ -403,7 +401,7 @@ def tracking_errors(traj) -> dict:
     """The position servo's joint tracking error: ``max_tracking_error`` and ``rms_tracking_error``
     [rad], the largest and the RMS over the steps of max_j |q_j - q_ref,j| at each step's end.
 
-    Helper: reported per gait (the servo of assumption A7 lags its reference).
+    Reported per gait (the servo of assumption A7 lags its reference).
     """
     e = np.asarray(traj.steps["tracking_error"], dtype=float)
     if not len(e):

@@ -1,8 +1,8 @@
 """``cobra-ref bench``: time per step of the full COBRA + box model, broken down, against MuJoCo.
 
-Helper: a benchmark, not a test. It simulates the built-in C rolling with the box (the
-``cobra-ref simulate`` defaults: compliant contact, position servo) for ``duration`` seconds at
-dt, from the settled start, and reports:
+A benchmark, not a test. It simulates the built-in C rolling with the box (the ``cobra-ref
+simulate`` defaults: compliant contact, position servo) for ``duration`` seconds at dt, from the
+settled start, and reports:
 
 * ``us_per_step`` -- the fast stepper's wall time per step [us] and ``real_time_factor`` =
   simulated / wall time;
@@ -39,8 +39,6 @@ REFERENCE_STEPS = 100
 
 def run_bench(duration: float = 2.0, dt: float = DEFAULT_DT, with_mujoco: bool = True, progress=None) -> dict:
     """Time the rolling push; return the benchmark record (see the module docstring).
-
-    Helper: the benchmark (cobra-ref bench).
     """
     model, reference, settings = cobra_model(), RollingGait(), StepSettings(dt=dt)
     q0, qd0 = initial_state(model, reference, settings)
@@ -73,10 +71,9 @@ def run_bench(duration: float = 2.0, dt: float = DEFAULT_DT, with_mujoco: bool =
 def mujoco_us_per_step(model, reference, q0, n_steps: int, dt: float) -> float | None:
     """MuJoCo's wall time [us] per ``dt`` of simulated time on the exported model, or None without mujoco.
 
-    Helper: the benchmark (cobra-ref bench). MuJoCo runs at its own stable timestep
-    (``mjcf.TIMESTEP``, 0.1 ms: it integrates the stiff contact explicitly, A27), so one of our
-    steps of dt is dt / TIMESTEP of its steps; its position actuators track the same reference
-    (``mujoco_check.servo_control``).
+    The benchmark (cobra-ref bench). MuJoCo runs at its own stable timestep (``mjcf.TIMESTEP``, 0.1
+    ms: it integrates the stiff contact explicitly, A27), so one of our steps of dt is dt / TIMESTEP
+    of its steps; its position actuators track the same reference (``mujoco_check.servo_control``).
     """
     try:
         import mujoco
@@ -101,8 +98,6 @@ def mujoco_us_per_step(model, reference, q0, n_steps: int, dt: float) -> float |
 
 def format_table(record: dict) -> str:
     """The benchmark record as a small text table.
-
-    Helper: the benchmark (cobra-ref bench).
     """
     lines = [f"{record['model']}, {record['steps']} steps",
              f"{'fast stepper (default)':<28}{record['us_per_step']:>10.1f} us/step   real-time factor "

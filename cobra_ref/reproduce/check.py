@@ -43,9 +43,9 @@ def _flatten(values, prefix: str = "") -> dict:
 def claim_statistics(ensemble: dict, paper_claims) -> dict:
     """{claim id: {name: {"mean", "min", "max", "n"}}}: each number of each claim over the members.
 
-    Helper: ``paper_claims`` (``claims.paper_claims``) is applied to member i of every gait of
-    ``ensemble`` ({gait: [summary per member]}) for each i the gaits share; a number's mean,
-    min and max are over those members (module docstring).
+    ``paper_claims`` (``claims.paper_claims``) is applied to member i of every gait of ``ensemble``
+    ({gait: [summary per member]}) for each i the gaits share; a number's mean, min and max are over
+    those members (module docstring).
     """
     n = min((len(v) for v in ensemble.values()), default=0)
     per_claim: dict = {}
@@ -69,7 +69,7 @@ def _nonfinite(xs):
 
 
 def verdict(entry: dict):
-    """Helper: a claim entry's verdict (``verdict`` if present, else ``holds``)."""
+    """A claim entry's verdict (``verdict`` if present, else ``holds``)."""
     return entry.get("verdict", entry.get("holds"))
 
 
@@ -114,8 +114,8 @@ def compare_claims(old: list[dict], new: list[dict]) -> list[str]:
 def read_committed(path: str) -> list[dict]:
     """The claim entries of the committed ``claims.json`` at ``path``.
 
-    Helper: ``--check`` reads them before regenerating. Raises FileNotFoundError when there is
-    no such file and ValueError naming the file when it is not a list of claim entries.
+    ``--check`` reads them before regenerating. Raises FileNotFoundError when there is no such file
+    and ValueError naming the file when it is not a list of claim entries.
     """
     with open(path, encoding="utf-8") as f:
         try:
@@ -128,6 +128,6 @@ def read_committed(path: str) -> list[dict]:
 
 
 def mismatch_table(mismatches: list[str]) -> str:
-    """Helper: the mismatches as a markdown table (one row each) for stderr."""
+    """The mismatches as a markdown table (one row each) for stderr."""
     rows = ["| # | mismatch |", "|---|---|"] + [f"| {i + 1} | {m.replace('|', '/')} |" for i, m in enumerate(mismatches)]
     return "\n".join(rows) + "\n"

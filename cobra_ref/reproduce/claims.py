@@ -1,6 +1,6 @@
 """The paper's claims, each tested by a number computed from our simulations, per ensemble member.
 
-Helper: the claims report of ``cobra-ref figures`` (``claims.json`` and ``claims.md``).
+The claims report of ``cobra-ref figures`` (``claims.json`` and ``claims.md``).
 
 [COBRA] gives no numbers, only plots and sentences (sec. "Results", figs. 6-9; assumption A21).
 Each claim below is a statistic of ``analysis.summary`` and a condition on it, with its
@@ -122,7 +122,7 @@ def inefficiency(slope: float) -> float:
     """The E claim's ranking number of an efficiency slope [J/J]: the slope where it is positive,
     +inf where it is not (an efficiency 1 / slope <= 0, module docstring); nan stays nan.
 
-    Helper: claim E's per-member comparison and its spreads.
+    Claim E's per-member comparison and its spreads.
     """
     return slope if not slope <= 0 else float("inf")
 
@@ -188,7 +188,7 @@ def directions(displacements) -> tuple:
     deviation the signed angle from it in (-180, 180], the half-spread (max - min) / 2 of the
     deviations. (nan, [], nan) when none is longer.
 
-    Helper: the angular spread of an ensemble's box pushes (claim MJ-C).
+    The angular spread of an ensemble's box pushes (claim MJ-C).
     """
     d = np.array([x for x in displacements if math.hypot(*x) > RESOLUTION], dtype=float).reshape(-1, 2)
     if not len(d):
@@ -266,7 +266,7 @@ def _goal_angle(s) -> float:
 def ensemble_claims(ensemble: dict) -> list[dict]:
     """The claims of the module docstring, each evaluated per member of ``ensemble`` {gait: [summary, ...]}.
 
-    Helper: ``ensemble[gait][i]`` is member (scenario) i's ``analysis.summary`` plus the fields of
+    ``ensemble[gait][i]`` is member (scenario) i's ``analysis.summary`` plus the fields of
     ``gait_summaries`` and optionally ``goal_direction``; the verdicts follow the 80/20 rule.
     """
     ensemble = {g: list(v) for g, v in ensemble.items()}
@@ -323,7 +323,7 @@ def ensemble_claims(ensemble: dict) -> list[dict]:
 def paper_claims(summaries: dict) -> list[dict]:
     """The claims of ``ensemble_claims`` for one member per gait, from {gait: analysis.summary(traj)}.
 
-    Helper: each claim's number is a field of ``analysis.summary``; nothing is typed in.
+    Each claim's number is a field of ``analysis.summary``; nothing is typed in.
     """
     return ensemble_claims({g: [s] for g, s in summaries.items()})
 
@@ -333,7 +333,7 @@ def gait_summaries(results: dict) -> dict:
     penetration and friction-cone residual, the share of steps over tau_max, and the goal
     direction when the trajectory's ``meta`` has one.
 
-    Helper: the numbers behind ``paper_claims`` and the model-health table of ``claims.md``.
+    The numbers behind ``paper_claims`` and the model-health table of ``claims.md``.
     """
     out = {}
     for g, traj in results.items():
@@ -355,7 +355,7 @@ def ensemble_summaries(members: list[dict]) -> dict:
     scenario; a gait missing from a member gets the summary {"error": "no run"} so that index i
     stays scenario i.
 
-    Helper: the input of ``ensemble_claims`` (``gait_summaries`` per member; a trajectory's
+    The input of ``ensemble_claims`` (``gait_summaries`` per member; a trajectory's
     ``meta["goal_direction"]``, when set, becomes the summary's ``goal_direction``).
     """
     per_member = [gait_summaries(m) for m in members]

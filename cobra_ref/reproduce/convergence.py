@@ -1,8 +1,8 @@
 """``cobra-ref convergence``: do the results hold when dt halves? One gait at dt = 2, 1, 0.5, 0.25 ms.
 
-Helper: the time-step convergence study of the paper's non-impulsive premise. For one gait and
-each setting (contact law and servo), ``study`` simulates ``duration`` seconds at each dt and
-``metrics`` measures what the paper's figures show:
+The time-step convergence study of the paper's non-impulsive premise. For one gait and each setting
+(contact law and servo), ``study`` simulates ``duration`` seconds at each dt and ``metrics``
+measures what the paper's figures show:
 
 * contact force of each body (the vector sum of its contacts' forces, [N]): the raw per-step
   peak, the peak of its ``WINDOW`` (2 ms) moving mean, and the 99th percentile of the loaded
@@ -48,7 +48,7 @@ SETTINGS = {"high-fidelity": ("compliant", "position"), "rigid": ("rigid", "pres
 def moving_mean(y: np.ndarray, dt: float, window: float = WINDOW) -> np.ndarray:
     """Means of y over every run of window / dt consecutive steps (along axis 0).
 
-    Helper: the 2 ms mean of the convergence metrics.
+    The 2 ms mean of the convergence metrics.
     """
     n = max(1, int(round(window / dt)))
     if len(y) < n:
@@ -60,8 +60,8 @@ def moving_mean(y: np.ndarray, dt: float, window: float = WINDOW) -> np.ndarray:
 def body_forces(traj, model) -> np.ndarray:
     """(N, nb) norm of the sum of the contact forces on each body per step [N].
 
-    Helper: the contact log's forces act on body A (the robot link, or the box on the ground);
-    the box also feels minus the robot-box rows.
+    The contact log's forces act on body A (the robot link, or the box on the ground); the box also
+    feels minus the robot-box rows.
     """
     c = traj.contacts
     F = np.zeros((len(traj.tau), model.nb, 3))
@@ -75,8 +75,6 @@ def body_forces(traj, model) -> np.ndarray:
 
 def metrics(traj, model) -> dict:
     """The convergence metrics of one run (module docstring).
-
-    Helper: one row of the study's table.
     """
     dt = traj.dt
     F = body_forces(traj, model)
@@ -94,7 +92,7 @@ def metrics(traj, model) -> dict:
 class Shifted:
     """The joint reference of a run that starts at time ``t0`` of the gait: ``Shifted(ref, t0)(t) = ref(t0 + t)``.
 
-    Helper: the runs of a study restarted at T (``study``).
+    The runs of a study restarted at T (``study``).
     """
 
     def __init__(self, reference, t0: float):
@@ -107,8 +105,6 @@ class Shifted:
 def check_restart(restart: float, duration: float, dts) -> None:
     """A ``ValidationError`` unless 0 <= restart < duration and restart is a whole number of steps
     of the finest dt (the state every run starts from is the finest run's at that step).
-
-    Helper: ``study``'s and ``cobra-ref convergence --restart``'s check.
     """
     n = restart / min(dts)
     if not 0.0 <= restart < duration or abs(n - round(n)) > 1e-9 * max(n, 1.0):
@@ -120,8 +116,6 @@ def study(gait_name: str = "J", duration: float = 2.0, dts=DTS, settings=tuple(S
           restart: float = 0.0) -> dict:
     """{setting: {dt: metrics}} of one gait (module docstring); ``restart`` = T > 0: every dt runs
     from T to ``duration``, starting from the state the finest dt reached at T.
-
-    Helper: ``cobra-ref convergence``.
     """
     check_restart(restart, duration, dts)
     model, ref = cobra_model(), gait(gait_name)
@@ -155,7 +149,7 @@ def study(gait_name: str = "J", duration: float = 2.0, dts=DTS, settings=tuple(S
 def changes(rows: dict) -> dict:
     """{metric: [relative change from each dt to the next smaller one]} of one setting's rows.
 
-    Helper: the convergence verdicts (|change| <= 10 %, 25 %, 5 % in the README's table).
+    The convergence verdicts (|change| <= 10 %, 25 %, 5 % in the README's table).
     """
     dts = sorted(rows, reverse=True)
     keys = [k for k in rows[dts[0]] if k not in ("seconds", "fixed_point_converged")]
@@ -165,8 +159,6 @@ def changes(rows: dict) -> dict:
 
 def format_table(result: dict, gait_name: str, restart: float = 0.0) -> str:
     """The study as a text table: one block per setting, one column per dt.
-
-    Helper: what ``cobra-ref convergence`` prints.
     """
     lines = []
     for name, rows in result.items():

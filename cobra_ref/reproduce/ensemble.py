@@ -49,7 +49,7 @@ class Member:
         return self.box_shift == (0.0, 0.0) and self.box_turn == 0.0 and self.phase == 0.0 and self.mu_scale == 1.0
 
     def as_dict(self) -> dict:
-        """Helper: the member as plain JSON (cache keys, trajectory meta, reports)."""
+        """The member as plain JSON (cache keys, trajectory meta, reports)."""
         return {"index": self.index, "box_shift": [float(x) for x in self.box_shift],
                 "box_turn": float(self.box_turn), "phase": float(self.phase), "mu_scale": float(self.mu_scale)}
 
@@ -77,8 +77,6 @@ def members(gait: str, n: int) -> list[Member]:
 
 def mirrored(member: Member) -> Member:
     """``member`` reflected about the start heading (+x): dy -> -dy, box_turn -> -box_turn.
-
-    Helper: J-mirror's members from J's (module docstring).
     """
     dx, dy = member.box_shift
     return Member(member.index, (dx, -dy if dy else 0.0), -member.box_turn if member.box_turn else 0.0,

@@ -78,7 +78,7 @@ class MujocoRollout(NamedTuple):
 def mujoco_available() -> bool:
     """True when ``import mujoco`` works.
 
-    Helper: lets callers skip the comparison instead of catching ``MujocoUnavailable``.
+    Lets callers skip the comparison instead of catching ``MujocoUnavailable``.
     """
     try:
         _import_mujoco()
@@ -182,8 +182,8 @@ def _check_diverged(mujoco, d, qpos, k: int, timestep: float) -> None:
 def robot_com(model: Model, q) -> np.ndarray:
     """(2,) horizontal position of the robot's centre of mass (every body but the box) [m].
 
-    Helper: the travel of the robot-only comparison, the mass-weighted mean of the bodies'
-    centres of mass, for our trajectories and MuJoCo's alike.
+    The travel of the robot-only comparison, the mass-weighted mean of the bodies' centres of mass,
+    for our trajectories and MuJoCo's alike.
     """
     from ..kinematics import forward_kinematics
 
@@ -196,8 +196,6 @@ def robot_com(model: Model, q) -> np.ndarray:
 
 def box_displacement(model: Model, q_start, q_end) -> np.ndarray:
     """(2,) horizontal displacement of the box's centre between two configurations [m].
-
-    Helper: the box-ensemble comparison.
     """
     iq = model.q_idx[model.boxes[0].body]
     return np.asarray(q_end, dtype=float)[iq][:2] - np.asarray(q_start, dtype=float)[iq][:2]
@@ -270,8 +268,6 @@ def robot_travel_rows(gaits, duration: float = TRAVEL_DURATION, executor=None, t
 
 def scaled_friction(model: Model, mu_scale: float) -> Model:
     """``model`` with every coefficient of friction (robot-ground, box-ground, robot-box) times ``mu_scale``.
-
-    Helper: an ensemble member's friction (``box_ensemble_rows``).
     """
     if mu_scale == 1.0:
         return model
@@ -368,7 +364,7 @@ def ensembles_overlap(ours, mujoco, resolution: float = RESOLUTION) -> dict:
 def claims(rows: list[dict]) -> list[dict]:
     """Claim entries {"id", "claim", "values", "holds"} from robot-travel and box-ensemble rows.
 
-    Helper: the MuJoCo part of the claims report; ids "MJ-travel-<gait>" and "MJ-box-<gait>".
+    The MuJoCo part of the claims report; ids "MJ-travel-<gait>" and "MJ-box-<gait>".
     """
     return [_travel_claim(r) if r["kind"] == "travel" else _box_claim(r) for r in rows]
 

@@ -1,6 +1,6 @@
 """Run the paper's gaits for the figures: one simulation per gait and ensemble member, cached, on any executor.
 
-Helper: the simulation half of ``cobra-ref figures`` ([COBRA] sec. "Results", figs. 3-9).
+The simulation half of ``cobra-ref figures`` ([COBRA] sec. "Results", figs. 3-9).
 
 Each run is a ``RunSpec``: the gait's name and parameters, the duration, dt, the robot-box
 friction and the ensemble member (``ensemble.Member``: box shift and turn, phase shift, friction
@@ -117,7 +117,7 @@ def run(spec: RunSpec, cache_dir: str, force: bool = False, progress=None) -> tu
     """The trajectory of ``spec``, from the cache when it holds this exact run (unless ``force``),
     else simulated and stored. Returns (trajectory, came_from_cache).
 
-    Helper: one gait run of the figure command (module docstring: cache key, box placement).
+    One gait run of the figure command (module docstring: cache key, box placement).
     """
     if not force:
         cached = cached_path(spec, cache_dir)
@@ -133,7 +133,7 @@ def nominal_placement(spec: RunSpec):
     ``spec``: its gait parameters and frictions without the member's perturbation, so every member
     starts from the same placement before its own shift and turn.
 
-    Helper: ``simulate_spec``; computed once per process for each nominal run (a box-free run).
+    ``simulate_spec``; computed once per process for each nominal run (a box-free run).
     """
     nominal = replace(spec, member=None)
     return _placement(nominal.gait, json.dumps(nominal.params, sort_keys=True), nominal.dt, nominal.mu_robot_box)
@@ -149,7 +149,7 @@ def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Traject
     """Simulate ``spec`` from its placed and settled start, its member's perturbation applied;
     return (trajectory, failed): a run that fails mid-way returns what it computed, its error set.
 
-    Helper: the simulation of ``run``, alone so that any executor can run it (nothing is written).
+    The simulation of ``run``, alone so that any executor can run it (nothing is written).
     ``placement``: sidewinding's ``nominal_placement``, if it is known (computed here otherwise).
     """
     model = cobra_model(spec.cobra_parameters(), with_box=True)
@@ -177,8 +177,6 @@ def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Traject
 
 def store(spec: RunSpec, cache_dir: str, traj: Trajectory, failed: bool) -> str:
     """Write ``traj`` to the cache (``<name>.npz``, or ``<name>.failed.npz`` for a failed run); return the path.
-
-    Helper: the cache of ``run`` and ``run_all``.
     """
     path = os.path.join(cache_dir, spec.filename())
     out = path[:-4] + ".failed.npz" if failed else path
@@ -189,8 +187,6 @@ def store(spec: RunSpec, cache_dir: str, traj: Trajectory, failed: bool) -> str:
 
 def cached_path(spec: RunSpec, cache_dir: str) -> str | None:
     """The cache file of ``spec`` (complete or failed run), or None.
-
-    Helper: the cache of ``run`` and ``run_all``.
     """
     path = os.path.join(cache_dir, spec.filename())
     for p in (path, path[:-4] + ".failed.npz"):
@@ -218,13 +214,13 @@ def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = No
     """Run every spec not in the cache and return {spec: Trajectory}, every trajectory read back
     from the cache (so the results do not depend on where the runs ran).
 
-    Helper: the figure command's simulations. ``executor``: any ``concurrent.futures.Executor``
-    (a process pool, ``executors.SerialExecutor``, a Dask client's ``get_executor()``); the
-    runs are simulated there and written to ``cache_dir`` here. Default: a process pool with
-    ``executors.worker_init`` on ``workers`` processes (default: the machine's cores), or this
-    process for a single run or a single worker. Progress on stderr: the runs done of the total
-    and the time left, as each run completes; with the default pool also each running run's
-    percentage. A run's exception is raised here.
+    The figure command's simulations. ``executor``: any ``concurrent.futures.Executor`` (a process
+    pool, ``executors.SerialExecutor``, a Dask client's ``get_executor()``); the runs are simulated
+    there and written to ``cache_dir`` here. Default: a process pool with ``executors.worker_init``
+    on ``workers`` processes (default: the machine's cores), or this process for a single run or a
+    single worker. Progress on stderr: the runs done of the total and the time left, as each run
+    completes; with the default pool also each running run's percentage. A run's exception is raised
+    here.
     """
     specs = list(specs)
     todo = list(dict.fromkeys(s for s in specs if force or not cached_path(s, cache_dir)))

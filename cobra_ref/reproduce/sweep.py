@@ -1,7 +1,7 @@
 """``cobra-ref sweep``: how reliable is the contact solve? Randomized scenarios, each checked.
 
-Helper: a reliability sweep of the step over the conditions the package meets. ``scenarios``
-draws N scenarios from one seed, each independently:
+A reliability sweep of the step over the conditions the package meets. ``scenarios`` draws N
+scenarios from one seed, each independently:
 
 * a gait (C, S, J, J-mirror, sidewinding) with its parameters uniform within the optimizer's
   bounds (``planning.problem.DECISION``);
@@ -59,8 +59,6 @@ class Scenario:
 
 def scenarios(n: int, seed: int = 0, laws=("compliant",)) -> list[Scenario]:
     """N scenarios drawn from ``seed`` (module docstring); the same seed gives the same scenarios.
-
-    Helper: the draw of the sweep.
     """
     rng = np.random.default_rng(seed)
     out = []
@@ -77,7 +75,7 @@ def scenarios(n: int, seed: int = 0, laws=("compliant",)) -> list[Scenario]:
 def run_scenario(scenario: Scenario, duration: float = 2.0) -> dict:
     """The measures of one scenario's run (module docstring), as a JSON-ready record.
 
-    Helper: what the sweep's executor runs (a module-level function: picklable).
+    What the sweep's executor runs (a module-level function: picklable).
     """
     params = CobraParameters(mu=scenario.mu, mu_robot_box=scenario.mu_robot_box, box_mass=scenario.box_mass)
     settings = StepSettings(dt=scenario.dt, servo=scenario.servo, contact=scenario.contact)
@@ -95,8 +93,6 @@ def run_scenario(scenario: Scenario, duration: float = 2.0) -> dict:
 
 def measures(traj) -> dict:
     """The reliability measures of one trajectory (module docstring).
-
-    Helper: per-run numbers of the sweep.
     """
     s = traj.steps
     W_contact = float(s["work_contacts"][:-1].sum())
@@ -113,8 +109,6 @@ def measures(traj) -> dict:
 
 def summarize(records: list[dict]) -> dict:
     """Worst and median of each measure over the sweep, and the scenarios that fail ``CHECKS``.
-
-    Helper: the sweep's summary table.
     """
     done = [r for r in records if "converged" in r]
     table = {}
@@ -132,8 +126,6 @@ def summarize(records: list[dict]) -> dict:
 
 def format_summary(summary: dict) -> str:
     """The summary as a text table (one line per measure).
-
-    Helper: what ``cobra-ref sweep`` prints.
     """
     lines = [f"{summary['completed']} of {summary['scenarios']} scenarios completed; friction fixed point converged on "
              f"{100 * summary['steps_converged']:.3f} % of all steps",

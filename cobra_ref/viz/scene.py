@@ -1,10 +1,10 @@
 """What the viewer and the renderer show of a saved run: the MJCF scene, the pose at a state, the
 contact forces of a step, the box's path and where the camera looks.
 
-Helper: shared by :mod:`cobra_ref.viz.view` and :mod:`cobra_ref.viz.render`. The scene is
-``to_mjcf(cobra_model())`` with visual-only additions (a 0.1 m checker ground, opaque body
-colours, the contact spheres moved to geom group 3, which MuJoCo hides by default); masses,
-joints and contact geometry are untouched, so ``q`` of a run is MuJoCo's ``qpos`` (nq = 25).
+Shared by :mod:`cobra_ref.viz.view` and :mod:`cobra_ref.viz.render`. The scene is
+``to_mjcf(cobra_model())`` with visual-only additions (a 0.1 m checker ground, opaque body colours,
+the contact spheres moved to geom group 3, which MuJoCo hides by default); masses, joints and
+contact geometry are untouched, so ``q`` of a run is MuJoCo's ``qpos`` (nq = 25).
 
 The markers come from the run's contact log, never from MuJoCo's own contact detection: at state
 k, the rows of step k (the step from t_k to t_k+1; the last state shows the last step). Each row
@@ -49,8 +49,8 @@ class RunError(ValueError):
 def load_run(path: str) -> Trajectory:
     """Read a run written by ``cobra-ref simulate --out RUN.npz`` and check what the viewer needs.
 
-    Helper: the viewer and the renderer. Raises RunError naming the problem: a missing file, a
-    file that is not an NPZ, a missing array, q of the wrong shape.
+    The viewer and the renderer. Raises RunError naming the problem: a missing file, a file that is
+    not an NPZ, a missing array, q of the wrong shape.
     """
     if not os.path.isfile(path):
         raise RunError(f"no such run file: {path}")
@@ -74,7 +74,7 @@ def replay_arrays(path: str) -> Trajectory:
     """A Trajectory holding only what a replay shows: t, q, box_pose and the contact log (qd and
     tau when present); RunError naming the first missing array.
 
-    Helper: :func:`load_run` for runs whose per-step records differ from this version's.
+    :func:`load_run` for runs whose per-step records differ from this version's.
     """
     with np.load(path, allow_pickle=False) as z:
         for key in ("t", "q", "box_pose") + CONTACT_KEYS[:6]:
@@ -91,7 +91,7 @@ def replay_arrays(path: str) -> Trajectory:
 def scene_xml() -> str:
     """The MJCF of COBRA and the box with the visual additions listed in the module docstring.
 
-    Helper: the viewer's and the renderer's model (the physics is that of ``to_mjcf``).
+    The viewer's and the renderer's model (the physics is that of ``to_mjcf``).
     """
     model = cobra_model()
     root = ET.fromstring(to_mjcf(model))
@@ -125,7 +125,7 @@ def scene_xml() -> str:
 def build_scene():
     """``(MjModel, MjData)`` of :func:`scene_xml`, checked to have nq = 25.
 
-    Helper: the viewer and the renderer (imports mujoco).
+    The viewer and the renderer (imports mujoco).
     """
     import mujoco
 
@@ -138,7 +138,7 @@ def build_scene():
 def set_state(m, d, traj: Trajectory, k: int) -> None:
     """Pose the MuJoCo scene at state k: qpos = q[k], time = t[k], then ``mj_forward``.
 
-    Helper: one replayed frame (q is MuJoCo's qpos layout, see :mod:`cobra_ref.mjcf`).
+    One replayed frame (q is MuJoCo's qpos layout, see :mod:`cobra_ref.mjcf`).
     """
     import mujoco
 
@@ -150,8 +150,6 @@ def set_state(m, d, traj: Trajectory, k: int) -> None:
 
 def state_indices(traj: Trajectory, times) -> np.ndarray:
     """Index of the state nearest to each time (clipped to the run).
-
-    Helper: frame times to states.
     """
     t = np.asarray(traj.t, dtype=float)
     times = np.clip(np.atleast_1d(np.asarray(times, dtype=float)), t[0], t[-1])
@@ -166,8 +164,6 @@ def frame_times(traj: Trajectory, fps: float, speed: float = 1.0) -> np.ndarray:
     """Times of the frames of a video at ``fps`` frames per second of video, ``speed`` simulated
     seconds per video second (0.25 = four times slower than real time), from the first state to the
     last.
-
-    Helper: the renderer's frame sampling.
     """
     step = speed / fps
     return traj.t[0] + np.arange(int(np.floor(traj.duration / step + 1e-9)) + 1) * step
@@ -175,8 +171,6 @@ def frame_times(traj: Trajectory, fps: float, speed: float = 1.0) -> np.ndarray:
 
 def contact_step(traj: Trajectory, k: int) -> int:
     """The step whose contact log is shown at state k: step k, the last step at the last state.
-
-    Helper: markers of a frame.
     """
     return min(int(k), max(len(traj.t) - 2, 0))
 
@@ -185,7 +179,7 @@ def contact_arrows(traj: Trajectory, k: int) -> dict:
     """The contact-log rows shown at state k: ``points`` (m, 3), ``forces`` (m, 3) [N], ``kinds``
     (m,) and ``bodies`` (m,), in the log's order.
 
-    Helper: the force arrows of the viewer and the renderer.
+    The force arrows of the viewer and the renderer.
     """
     c = traj.contacts
     if any(key not in c for key in CONTACT_KEYS[:6]):
@@ -201,7 +195,7 @@ def box_path(traj: Trajectory, k: int, segments: int = PATH_SEGMENTS) -> np.ndar
     """(n, 3) points of the box centre's path up to state k, at most ``segments`` + 1 of them,
     lowered onto the ground (z = 2 mm, above the ground so it is not hidden by it).
 
-    Helper: the path line of the viewer and the renderer.
+    The path line of the viewer and the renderer.
     """
     idx = np.unique(np.linspace(0, k, min(k, segments) + 1).round().astype(int))
     pts = np.array(traj.box_pose[idx, :3], dtype=float)
@@ -213,9 +207,9 @@ def add_markers(scn, traj: Trajectory, k: int, force_scale: float = FORCE_SCALE)
     """Append to the MjvScene ``scn`` the contact arrows and points of state k and the box's path;
     return how many geoms were added (fewer when ``scn`` is full).
 
-    Helper: the viewer's ``user_scn`` and the renderer's scene. An arrow runs from the contact
-    point to point + force_scale * force (``mjv_connector``: its z axis is the force direction,
-    its length ``size[2]``).
+    The viewer's ``user_scn`` and the renderer's scene. An arrow runs from the contact point to
+    point + force_scale * force (``mjv_connector``: its z axis is the force direction, its length
+    ``size[2]``).
     """
     import mujoco
 
@@ -254,7 +248,7 @@ def add_markers(scn, traj: Trajectory, k: int, force_scale: float = FORCE_SCALE)
 def arrows_in_scene(scn, force_scale: float = FORCE_SCALE) -> tuple[np.ndarray, np.ndarray]:
     """The (start point, force) of every arrow geom in ``scn``, read back from the geoms.
 
-    Helper: checks of what a frame draws (force = z axis of the arrow * its length / force_scale).
+    Checks of what a frame draws (force = z axis of the arrow * its length / force_scale).
     """
     import mujoco
 
@@ -271,7 +265,7 @@ def scene_points(m, d, traj: Trajectory, k: int) -> dict:
     """World positions at state k (after :func:`set_state`): ``robot`` (12, 3) body frames,
     ``ends`` (24, 3) the two end centres of every body's cylinder, ``box`` (3,) the box centre.
 
-    Helper: camera framing and the renderer's in-frame check.
+    Camera framing and the renderer's in-frame check.
     """
     import mujoco
 
@@ -287,8 +281,8 @@ def scene_points(m, d, traj: Trajectory, k: int) -> dict:
 def camera_axes(azimuth: float, elevation: float) -> np.ndarray:
     """Rows forward, up, right of MuJoCo's free camera with these angles [deg].
 
-    Helper: camera framing (forward = (cos el cos az, cos el sin az, sin el), up is forward
-    turned 90 degrees upwards in the vertical plane, right = forward x up).
+    Camera framing (forward = (cos el cos az, cos el sin az, sin el), up is forward turned 90
+    degrees upwards in the vertical plane, right = forward x up).
     """
     az, el = np.deg2rad(azimuth), np.deg2rad(elevation)
     forward = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
@@ -299,14 +293,13 @@ def camera_axes(azimuth: float, elevation: float) -> np.ndarray:
 def follow_camera(m, d, traj: Trajectory, steps, width: int, height: int) -> dict:
     """A camera that follows the robot and keeps the box in view over the frames ``steps``.
 
-    Helper: the renderer's (and the viewer's first) camera. ``lookat`` (n, 3): per frame, the
-    centre of the bounding box of the robot's cylinders (their end centres) and the box.
-    ``azimuth`` looks across the robot's net travel, from the box's side; ``elevation`` -40
-    degrees. ``distance``: one value for the whole video (no zooming), the smallest at which
-    every cylinder end and the box centre, widened by ``BODY_MARGIN`` sideways, falls inside the
-    field of view in every frame, plus 10 %: a point at v from ``lookat`` has depth
-    D + v.forward and must satisfy |v.right| + margin <= tan(half horizontal fov) * depth, and
-    the same with up and the vertical fov.
+    The renderer's (and the viewer's first) camera. ``lookat`` (n, 3): per frame, the centre of the
+    bounding box of the robot's cylinders (their end centres) and the box. ``azimuth`` looks across
+    the robot's net travel, from the box's side; ``elevation`` -40 degrees. ``distance``: one value
+    for the whole video (no zooming), the smallest at which every cylinder end and the box centre,
+    widened by ``BODY_MARGIN`` sideways, falls inside the field of view in every frame, plus 10 %: a
+    point at v from ``lookat`` has depth D + v.forward and must satisfy |v.right| + margin <=
+    tan(half horizontal fov) * depth, and the same with up and the vertical fov.
     """
     steps = np.atleast_1d(np.asarray(steps, dtype=int))
     lookat, offsets, robot_centre = [], [], []
@@ -340,8 +333,6 @@ def follow_camera(m, d, traj: Trajectory, steps, width: int, height: int) -> dic
 
 def make_camera(camera: dict, i: int = 0):
     """The ``MjvCamera`` (free camera) of frame i of :func:`follow_camera`.
-
-    Helper: the renderer.
     """
     import mujoco
 

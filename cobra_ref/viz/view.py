@@ -1,13 +1,13 @@
 """Replay a saved run in MuJoCo's interactive viewer (``mujoco.viewer.launch_passive``).
 
-Helper: ``cobra-ref view``. The viewer shows the scene of :mod:`cobra_ref.viz.scene`; this
-module's loop poses it at the state of the current replay time (qpos = q[k], then
-``mj_forward``; nothing is simulated), draws the contact arrows and points of the run's log and
-the box's path into the viewer's ``user_scn``, and shows the time (the viewer's info panel reads
-``data.time``, and a text overlay). Replay time runs at ``speed`` times real time (0.25 = four
-times slower); the space bar pauses; the run starts again from the beginning when it ends
-(``loop``), or stays on its last state. The camera's point of interest follows the robot and
-the box (``follow``); the mouse still turns and zooms it.
+``cobra-ref view``. The viewer shows the scene of :mod:`cobra_ref.viz.scene`; this module's loop
+poses it at the state of the current replay time (qpos = q[k], then ``mj_forward``; nothing is
+simulated), draws the contact arrows and points of the run's log and the box's path into the
+viewer's ``user_scn``, and shows the time (the viewer's info panel reads ``data.time``, and a text
+overlay). Replay time runs at ``speed`` times real time (0.25 = four times slower); the space bar
+pauses; the run starts again from the beginning when it ends (``loop``), or stays on its last state.
+The camera's point of interest follows the robot and the box (``follow``); the mouse still turns and
+zooms it.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ def display_problem() -> str | None:
     cannot initialize on it (tried in a subprocess: the viewer's thread would otherwise wait forever
     for a window that never opens).
 
-    Helper: ``cobra-ref view`` fails clearly without a display.
+    ``cobra-ref view`` fails clearly without a display.
     """
     if not sys.platform.startswith("linux"):
         return None
@@ -52,8 +52,8 @@ def replay(traj, speed: float = 1.0, loop: bool = True, follow: bool = True,
            force_scale: float = scene.FORCE_SCALE, launch=None, max_frames: int | None = None) -> int:
     """Replay ``traj`` in the viewer until its window is closed; return the number of frames shown.
 
-    Helper: ``cobra-ref view``. ``launch`` defaults to ``mujoco.viewer.launch_passive`` (tests
-    pass their own); ``max_frames`` ends the loop early (tests).
+    ``cobra-ref view``. ``launch`` defaults to ``mujoco.viewer.launch_passive`` (tests pass their
+    own); ``max_frames`` ends the loop early (tests).
     """
     import mujoco
 

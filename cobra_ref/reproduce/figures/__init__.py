@@ -1,11 +1,11 @@
 """Figure scripts of [COBRA] figs. 3-9 and the GIFs, one module per figure.
 
-Helper: every module in ``FIGURES`` has
-``make(results: dict[str, Trajectory], out_dir: str, model, ensemble=None) -> list[str]``
-(``ensemble``: {gait: [``analysis.summary`` per member]}, see ``common``) and runs standalone as
-``python -m cobra_ref.figures.<module>`` (quick 1 s simulations, see ``common.main``).
-``PAPER_FIGURES`` are the paper's figures (PNG + PDF each); ``FIGURES`` adds ``animate`` (one GIF
-per gait, and the note ``animations.json`` of how each was rendered) at the end.
+Every module in ``FIGURES`` has ``make(results: dict[str, Trajectory], out_dir: str, model,
+ensemble=None) -> list[str]`` (``ensemble``: {gait: [``analysis.summary`` per member]}, see
+``common``) and runs standalone as ``python -m cobra_ref.reproduce.figures.<module>`` (quick 1 s simulations,
+see ``common.main``). ``PAPER_FIGURES`` are the paper's figures (PNG + PDF each); ``FIGURES`` adds
+``animate`` (one GIF per gait, and the note ``animations.json`` of how each was rendered) at the
+end.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ def make_all(results: dict, out_dir: str, model, animations: bool = True, ensemb
     """Run every module's ``make`` in ``FIGURES`` order (without the GIFs if ``animations`` is
     False), each with ``ensemble``, and return all paths written.
 
-    Helper: ``results`` = {gait: Trajectory} (e.g. from ``reproduce.run_all``, by gait); gaits missing from
+    ``results`` = {gait: Trajectory} (e.g. from ``reproduce.run_all``, by gait); gaits missing from
     it are left out of every figure.
     """
     paths = []

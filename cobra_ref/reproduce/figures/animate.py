@@ -54,7 +54,7 @@ def frame_steps(traj, max_frames: int = MAX_FRAMES, fps: float = FPS) -> np.ndar
     """State indices of at most ``max_frames`` frames, evenly spaced from the first state to the
     last, at most ``fps`` frames per simulated second.
 
-    Helper: subsampling of the trajectory for the matplotlib GIF.
+    Subsampling of the trajectory for the matplotlib GIF.
     """
     n = len(traj.q)
     duration = float(traj.t[n - 1] - traj.t[0]) if n else 0.0
@@ -65,8 +65,6 @@ def frame_steps(traj, max_frames: int = MAX_FRAMES, fps: float = FPS) -> np.ndar
 def playback_speed(traj) -> float:
     """Simulated seconds per second of GIF: 1 (real time) up to a ``GIF_SECONDS`` run, else
     duration / ``GIF_SECONDS`` (a 10 s run plays twice as fast, in 5 s).
-
-    Helper: the length of the MuJoCo GIFs.
     """
     return max(1.0, traj.duration / GIF_SECONDS)
 
@@ -74,7 +72,7 @@ def playback_speed(traj) -> float:
 def animate_gait(model, gait: str, traj, path: str) -> str:
     """Write the matplotlib GIF of one trajectory to ``path`` (atomically) and return ``path``.
 
-    Helper: one ``FuncAnimation`` whose frames redraw the fig. 3 scene at the sampled steps.
+    One ``FuncAnimation`` whose frames redraw the fig. 3 scene at the sampled steps.
     """
     steps = frame_steps(traj)
     lim = scene_limits(model, traj, steps)
@@ -97,8 +95,8 @@ def mujoco_problem() -> str | None:
     """Why the MuJoCo renderer cannot be used here (mujoco missing, no OpenGL backend renders),
     or None when it can.
 
-    Helper: the choice of renderer (``render.choose_gl``, which probes the backends once per
-    process, each in a short-lived subprocess).
+    The choice of renderer (``render.choose_gl``, which probes the backends once per process, each
+    in a short-lived subprocess).
     """
     try:
         from ...viz import gl, render
@@ -111,8 +109,8 @@ def mujoco_problem() -> str | None:
 def mujoco_gif(gait: str, traj, path: str) -> dict:
     """Render the GIF of one trajectory with MuJoCo; return ``render_gif``'s record.
 
-    Helper: ``GIF_FPS``, ``GIF_SIZE``, ``playback_speed``, no multisampling, the gait's name on
-    every frame; RenderError if MuJoCo cannot render.
+    ``GIF_FPS``, ``GIF_SIZE``, ``playback_speed``, no multisampling, the gait's name on every frame;
+    RenderError if MuJoCo cannot render.
     """
     from ...viz import render
 
@@ -124,7 +122,7 @@ def mujoco_gif(gait: str, traj, path: str) -> dict:
 def matplotlib_gif(model, gait: str, traj, path: str, reason: str | None) -> dict:
     """Write the matplotlib GIF of one trajectory; return a record like ``render_gif``'s.
 
-    Helper: the fallback renderer (``reason``: why not MuJoCo).
+    The fallback renderer (``reason``: why not MuJoCo).
     """
     start = time.perf_counter()
     animate_gait(model, gait, traj, path)
@@ -139,8 +137,6 @@ def matplotlib_gif(model, gait: str, traj, path: str, reason: str | None) -> dic
 def animate_one(model, gait: str, traj, path: str, problem: str | None) -> dict:
     """Write ``path`` with MuJoCo when ``problem`` is None, else (or when MuJoCo fails) with
     matplotlib; return the note's record of it.
-
-    Helper: one GIF of ``make``.
     """
     if problem is None:
         try:
@@ -156,8 +152,6 @@ def animate_one(model, gait: str, traj, path: str, problem: str | None) -> dict:
 def say(name: str, record: dict) -> None:
     """One line on stderr: which renderer made the GIF ``name``, its frames and time (and why not
     MuJoCo, for the fallback).
-
-    Helper: ``make``'s report.
     """
     line = f"animate: {name}: {record['renderer']}, {record['frames']} frames, {record['seconds']:.1f} s"
     if record["renderer"] == "mujoco":

@@ -1,12 +1,11 @@
 """Shared helpers of the paper-figure scripts: style, gait order and colours, saving, ``main``.
 
-Helper: no physics here. Every figure module has
-``make(results, out_dir, model, ensemble=None) -> list[str]`` and ends with
-``common.main(make)``, so that ``python -m cobra_ref.figures.fig07_power --out figures`` runs the
-quick simulations through ``reproduce.run_all`` (cached) and writes that one figure.
-``results`` = {gait: Trajectory} (the nominal runs); ``ensemble`` = {gait: [summary dict per
-member]}, each ``analysis.summary`` of one member's trajectory, member 0 (the nominal run) first:
-figs. 6 and 9 draw its spread (``draw_spread``), the others draw the nominal runs only.
+No physics here. Every figure module has ``make(results, out_dir, model, ensemble=None) ->
+list[str]`` and ends with ``common.main(make)``, so that ``python -m cobra_ref.reproduce.figures.fig07_power
+--out figures`` runs the quick simulations through ``reproduce.run_all`` (cached) and writes that
+one figure. ``results`` = {gait: Trajectory} (the nominal runs); ``ensemble`` = {gait: [summary dict
+per member]}, each ``analysis.summary`` of one member's trajectory, member 0 (the nominal run)
+first: figs. 6 and 9 draw its spread (``draw_spread``), the others draw the nominal runs only.
 
 Figures that compare gaits put them on one y scale (``robust_ylim``), and notes about clipped
 values go above the axes, outside the data (``note_above``, ``clip_note``).
@@ -51,8 +50,6 @@ NO_CONTACT = "no contact"
 def paper_style(make):
     """Decorator: run a figure's ``make`` under the paper's rcParams (``STYLE``), leaving the
     caller's matplotlib settings untouched.
-
-    Helper: shared figure style.
     """
     @functools.wraps(make)
     def styled(*args, **kwargs):
@@ -64,8 +61,6 @@ def paper_style(make):
 
 def new_figure(width: float, height: float) -> Figure:
     """A Figure with its own Agg canvas (no pyplot state, so nothing to close afterwards).
-
-    Helper: figure creation.
     """
     fig = Figure(figsize=(width, height), layout="constrained")
     FigureCanvasAgg(fig)
@@ -75,9 +70,9 @@ def new_figure(width: float, height: float) -> Figure:
 def save(fig: Figure, out_dir: str, stem: str) -> list[str]:
     """Write ``stem.png`` (``DPI``) and ``stem.pdf`` into ``out_dir``; return both paths.
 
-    Helper: each file is written to a temporary file in ``out_dir`` and renamed with
-    ``os.replace``, so a reader never sees a half-written figure. The PDF carries no creation
-    date, so re-running on the same data gives the same bytes.
+    Each file is written to a temporary file in ``out_dir`` and renamed with ``os.replace``, so a
+    reader never sees a half-written figure. The PDF carries no creation date, so re-running on the
+    same data gives the same bytes.
     """
     os.makedirs(out_dir, exist_ok=True)
     paths = []
@@ -91,7 +86,7 @@ def save(fig: Figure, out_dir: str, stem: str) -> list[str]:
 def ordered(results: dict) -> list[tuple[str, object]]:
     """The (gait, trajectory) pairs of ``results``: paper order first, then any other gait.
 
-    Helper: gait order of the figures; a gait missing from ``results`` is simply left out.
+    Gait order of the figures; a gait missing from ``results`` is simply left out.
     """
     known = [g for g in GAIT_ORDER if g in results]
     return [(g, results[g]) for g in known + sorted(set(results) - set(known))]
@@ -100,15 +95,13 @@ def ordered(results: dict) -> list[tuple[str, object]]:
 def gait_color(gait: str) -> str:
     """The gait's colour (``GAIT_COLORS``; grey for a gait the paper does not have).
 
-    Helper: one colour per gait in every figure.
+    One colour per gait in every figure.
     """
     return GAIT_COLORS.get(gait, "tab:gray")
 
 
 def gait_label(gait: str, traj) -> str:
     """The gait's name, marked "(partial)" when its simulation stopped early.
-
-    Helper: panel titles and legends.
     """
     error = getattr(traj, "error", "") or traj.meta.get("error", "")
     return f"{gait} (partial)" if error else gait
@@ -116,8 +109,6 @@ def gait_label(gait: str, traj) -> str:
 
 def step_times(traj) -> np.ndarray:
     """(N,) start time of each step, the time axis of per-step quantities (tau, power, forces).
-
-    Helper: t_k for k = 0..N-1.
     """
     return np.asarray(traj.t[: len(traj.tau)])
 
@@ -125,9 +116,9 @@ def step_times(traj) -> np.ndarray:
 def minmax_decimate(t: np.ndarray, y: np.ndarray, max_points: int = 4000) -> tuple[np.ndarray, np.ndarray]:
     """Thin a long time series for plotting while keeping its envelope.
 
-    Helper: splits the (n,) samples ``y`` into bins and keeps each bin's minimum and maximum (in
-    time order), so peaks survive and a 10 s run at dt = 1 ms does not bloat the PDF; series
-    shorter than ``max_points`` are returned unchanged.
+    Splits the (n,) samples ``y`` into bins and keeps each bin's minimum and maximum (in time
+    order), so peaks survive and a 10 s run at dt = 1 ms does not bloat the PDF; series shorter than
+    ``max_points`` are returned unchanged.
     """
     n = len(t)
     if n <= max_points:
@@ -147,9 +138,9 @@ FORCE_WINDOW = 0.02  # [s] contact forces are drawn as means over windows of thi
 def window_mean(t: np.ndarray, y: np.ndarray, window: float = FORCE_WINDOW) -> tuple[np.ndarray, np.ndarray]:
     """Means of ``y`` over consecutive windows of ``window`` seconds, at the windows' centres.
 
-    Helper: a rigid contact solver redistributes the force among redundant contacts from one
-    1 ms step to the next; the mean force over a window (its impulse / window) is the physically
-    meaningful, readable quantity. Samples of a final, shorter window are averaged on their own.
+    A rigid contact solver redistributes the force among redundant contacts from one 1 ms step to
+    the next; the mean force over a window (its impulse / window) is the physically meaningful,
+    readable quantity. Samples of a final, shorter window are averaged on their own.
     """
     if len(t) < 2:
         return t, y
@@ -168,8 +159,6 @@ CLIP_MARGIN = 1.2  # a y axis capped at a percentile of |values| ends this facto
 def clip_levels(values, quantile: float) -> tuple[float, float] | None:
     """(peak, cap) of |values|: the largest, and ``CLIP_MARGIN`` x the ``quantile`` of them; None
     when there is no finite non-zero value.
-
-    Helper: ``robust_ylim``'s per-panel levels.
     """
     v = np.abs(np.asarray(values, dtype=float)).ravel()
     v = v[np.isfinite(v) & (v > 0)]
@@ -183,13 +172,12 @@ def robust_ylim(axes, values, quantile: float = 0.99, bottom: float | None = Non
     first steps) would otherwise flatten everything else; return, per axes, the peak of |values|
     that lies beyond the range (None where nothing is clipped).
 
-    Helper: readable force / power / torque panels that compare gaits on one scale. Each panel's
-    own need is its peak of |values|, or ``CLIP_MARGIN`` x its ``quantile`` when the peak is more
-    than 1.5 times that (a spike); the common limit is the largest need of any panel (+5 %), so
-    every panel's bulk shows and a gait with larger values looks larger. ``axes``: a list of
-    axes, ``values``: a list of one array per axes, ``bottom``: a fixed lower end (0 for
-    magnitudes). Call it after everything is plotted. The caller says what was clipped outside
-    the data area (``clip_note``).
+    Readable force / power / torque panels that compare gaits on one scale. Each panel's own need is
+    its peak of |values|, or ``CLIP_MARGIN`` x its ``quantile`` when the peak is more than 1.5 times
+    that (a spike); the common limit is the largest need of any panel (+5 %), so every panel's bulk
+    shows and a gait with larger values looks larger. ``axes``: a list of axes, ``values``: a list
+    of one array per axes, ``bottom``: a fixed lower end (0 for magnitudes). Call it after
+    everything is plotted. The caller says what was clipped outside the data area (``clip_note``).
     """
     if not axes:
         return []
@@ -208,7 +196,7 @@ def note_above(ax, text: str) -> None:
     """Write ``text`` small and grey above the axes' top right corner (the right-hand title slot),
     outside the data area; the layout makes room for it.
 
-    Helper: clip notes and peak annotations. Column titles then go on the left (``loc="left"``).
+    Clip notes and peak annotations. Column titles then go on the left (``loc="left"``).
     """
     ax.set_title(text, loc="right", fontsize=5.5, color="0.35", pad=2)
 
@@ -216,7 +204,7 @@ def note_above(ax, text: str) -> None:
 def clip_note(ax, peak: float | None, unit: str = "N") -> None:
     """``note_above`` "peak <peak> <unit> (clipped)" when ``robust_ylim`` clipped this axes.
 
-    Helper: the clip notes of figs. 4 and 5.
+    The clip notes of figs. 4 and 5.
     """
     if peak is not None:
         note_above(ax, f"peak {peak:.3g} {unit} (clipped)")
@@ -226,7 +214,7 @@ def shared_force_ylim(axes, values, unit: str = "N") -> None:
     """``robust_ylim`` from 0 on the ``axes`` (one column of force panels, one array of plotted
     values each) and a ``clip_note`` above each clipped one.
 
-    Helper: the common y scale of the force columns of figs. 4 and 5.
+    The common y scale of the force columns of figs. 4 and 5.
     """
     for ax, peak in zip(axes, robust_ylim(axes, values, bottom=0.0)):
         clip_note(ax, peak, unit)
@@ -240,8 +228,8 @@ def ensemble_values(ensemble: dict | None, gait: str, key: str) -> np.ndarray:
     """(n,) ``key`` of each member's summary in ``ensemble[gait]`` (member 0, the nominal run,
     first); empty without an ensemble or without that gait.
 
-    Helper: ``ensemble`` = {gait: [summary dict per member]}, each ``analysis.summary`` of one
-    member's trajectory (figs. 6 and 9).
+    ``ensemble`` = {gait: [summary dict per member]}, each ``analysis.summary`` of one member's
+    trajectory (figs. 6 and 9).
     """
     members = (ensemble or {}).get(gait, [])
     return np.array([float(m.get(key, np.nan)) for m in members], dtype=float)
@@ -252,8 +240,8 @@ def draw_spread(ax, x: float, values: np.ndarray, color: str, gait: str, width: 
     in member order, and a black bar from the 10th to the 90th percentile (``ENSEMBLE_RANGE``) at
     x; return how many members were not drawn (a non-finite value, e.g. an infinite slope).
 
-    Helper: the spread of figs. 6 and 9. The dots' Line2D has gid "ensemble-members:<gait>",
-    the bar's "ensemble-range:<gait>".
+    The spread of figs. 6 and 9. The dots' Line2D has gid "ensemble-members:<gait>", the bar's
+    "ensemble-range:<gait>".
     """
     v = np.asarray(values, dtype=float)
     finite = v[np.isfinite(v)]
@@ -270,7 +258,7 @@ def draw_spread(ax, x: float, values: np.ndarray, color: str, gait: str, width: 
 def ensemble_window(ensemble: dict | None) -> float | None:
     """The seconds each member's summary covers (its ``duration``; the claims' window), or None.
 
-    Helper: figs. 6 and 9 say that the members' dots are over this window.
+    Figs. 6 and 9 say that the members' dots are over this window.
     """
     durations = [m.get("duration") for members in (ensemble or {}).values() for m in members if m.get("duration")]
     return max(durations) if durations else None
@@ -279,8 +267,6 @@ def ensemble_window(ensemble: dict | None) -> float | None:
 def spread_handles(n_members: int, window: float | None = None) -> list:
     """Legend entries of ``draw_spread``: the members' dots (over their first ``window`` seconds,
     when given) and the 10-90 % bar.
-
-    Helper: figs. 6 and 9.
     """
     lo, hi = (round(100 * q) for q in ENSEMBLE_RANGE)
     over = "" if window is None else f", first {window:g} s"
@@ -292,7 +278,7 @@ def spread_handles(n_members: int, window: float | None = None) -> list:
 def empty_panel(ax, text: str = NO_CONTACT) -> None:
     """Write ``text`` in the middle of an axes that has nothing to show.
 
-    Helper: robust figures ("no contact" panels, missing gaits).
+    Robust figures ("no contact" panels, missing gaits).
     """
     ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", color="0.4",
             fontsize=8, style="italic")
@@ -300,8 +286,6 @@ def empty_panel(ax, text: str = NO_CONTACT) -> None:
 
 def box_body(model) -> int | None:
     """Index of the box body, or None for a model without a box.
-
-    Helper: ``model.boxes[0].body``.
     """
     return model.boxes[0].body if getattr(model, "boxes", ()) else None
 
@@ -309,7 +293,7 @@ def box_body(model) -> int | None:
 def robot_bodies(model) -> list[tuple[str, int]]:
     """(name, body index) of the robot's bodies from the head to the tail (head, L1..L10, tail).
 
-    Helper: fig. 4's rows; the links keep the paper's names L1..L10 (numbered from the head).
+    Fig. 4's rows; the links keep the paper's names L1..L10 (numbered from the head).
     """
     box = box_body(model)
     return [(n, i) for i, n in enumerate(model.body_names) if i != box]
@@ -318,8 +302,8 @@ def robot_bodies(model) -> list[tuple[str, int]]:
 def main(make, argv=None) -> list[str]:
     """Command-line entry of one figure script: run the quick simulations (cached) and ``make``.
 
-    Helper: ``python -m cobra_ref.figures.<module> [--out figures] [--cache .cobra_cache]
-    [--duration 1.0] [--gaits C S ...]``; prints the paths written.
+    ``python -m cobra_ref.reproduce.figures.<module> [--out figures] [--cache .cobra_cache] [--duration 1.0]
+    [--gaits C S ...]``; prints the paths written.
     """
     from ..runs import PAPER_GAITS, RunSpec, run_all
     from ...robots import cobra_model

@@ -37,7 +37,7 @@ BODY_COLORS = ("#222222", "#f3c300", "#875692", "#f38400", "#a1caf1", "#be0032",
 def link_colors(n: int) -> list:
     """n colours from ``BODY_COLORS``, head end first.
 
-    Helper: the same colour for a body in every panel.
+    The same colour for a body in every panel.
     """
     return [BODY_COLORS[i % len(BODY_COLORS)] for i in range(n)]
 
@@ -46,7 +46,7 @@ def plot_timeline(ax, t: np.ndarray, in_contact: np.ndarray, names: list[str], c
     """Contact timeline: one row per body (head on top), in the body's colour where it touches the
     ground, white elsewhere.
 
-    Helper: fig. 4's "which link touches the ground when".
+    Fig. 4's "which link touches the ground when".
     """
     if len(t) == 0 or not in_contact.any():
         common.empty_panel(ax)
@@ -63,8 +63,6 @@ def plot_timeline(ax, t: np.ndarray, in_contact: np.ndarray, names: list[str], c
 def plot_per_link(ax, t: np.ndarray, force: np.ndarray, colors: list) -> np.ndarray:
     """One line per body of a (N, n_bodies) force array [N], as means over ``common.FORCE_WINDOW``
     (20 ms); "no contact" when it is all zero. Returns the plotted non-zero means (for the y scale).
-
-    Helper: the f_N and f_T panels.
     """
     if len(t) == 0 or not np.any(force):
         common.empty_panel(ax)

@@ -27,8 +27,6 @@ def plot_normal_tangential(ax, t: np.ndarray, f_N: np.ndarray, f_T: np.ndarray, 
     """f_N solid and |f_T| dashed over time [N], as means over ``common.FORCE_WINDOW`` (20 ms);
     "no contact" when both are zero. Returns the plotted means (empty for "no contact"), for the
     y scale.
-
-    Helper: one force panel of fig. 5.
     """
     if len(t) == 0 or not (np.any(f_N) or np.any(f_T)):
         common.empty_panel(ax)
@@ -43,8 +41,6 @@ def plot_normal_tangential(ax, t: np.ndarray, f_N: np.ndarray, f_T: np.ndarray, 
 def plot_box_ground(ax, model, traj, t: np.ndarray, color: str) -> np.ndarray:
     """Box-ground f_N and |f_T| [N] (summed over the corners) and the box's weight m g dotted;
     returns the plotted means.
-
-    Helper: the right-hand panel of fig. 5.
     """
     box = common.box_body(model)
     if box is None:
@@ -60,7 +56,7 @@ def plot_box_ground(ax, model, traj, t: np.ndarray, color: str) -> np.ndarray:
 def touching_links(model, in_contact: np.ndarray) -> str:
     """Names of the bodies that touched the box at least once, e.g. "L5, L6".
 
-    Helper: the "contact points" of the paper's fig. 5, as a list of links.
+    The "contact points" of the paper's fig. 5, as a list of links.
     """
     bodies = np.flatnonzero(in_contact.any(axis=0))
     return ", ".join(model.body_names[i] for i in bodies)

@@ -34,8 +34,6 @@ ENDPOINTS_GID = "ensemble-endpoints"  # the members' (W_box(T), W_loc(T)) dots: 
 
 def slope_label(gait: str, traj, slope: float) -> str:
     """Legend entry: the gait and its slope dW_loc/dW_box [J/J] (or "no work on box").
-
-    Helper: fig. 6 legend.
     """
     name = common.gait_label(gait, traj)
     return f"{name}: slope {slope:.3g} J/J" if np.isfinite(slope) else f"{name}: no work on box"
@@ -44,8 +42,6 @@ def slope_label(gait: str, traj, slope: float) -> str:
 def plot_work(ax, rows, ensemble: dict | None) -> dict:
     """The curves W_loc against W_box [J], their end points and fitted lines, and with an
     ensemble its members' end points; returns {gait: nominal slope}.
-
-    Helper: fig. 6's main panel.
     """
     slopes = {}
     for gait, traj in rows:
@@ -67,8 +63,6 @@ def plot_work(ax, rows, ensemble: dict | None) -> dict:
 
 def plot_slopes(ax, rows, slopes: dict, ensemble: dict) -> None:
     """Per gait, the nominal slope [J/J] (diamond) and its ensemble members beside it.
-
-    Helper: fig. 6's ensemble panel.
     """
     labels, drawn, n_members = [], [], 0
     for i, (gait, traj) in enumerate(rows):

@@ -24,7 +24,7 @@ from . import common
 def power_note(P_abs: np.ndarray, clipped: bool) -> str:
     """The numbers above a panel, e.g. "|P|: mean 3.1, p99 9.2, peak 9.5 W (clipped)".
 
-    Helper: fig. 7's annotation (mean, 99th percentile and peak of |P|_loc [W]).
+    Fig. 7's annotation (mean, 99th percentile and peak of |P|_loc [W]).
     """
     if not len(P_abs):
         return ""
@@ -34,8 +34,6 @@ def power_note(P_abs: np.ndarray, clipped: bool) -> str:
 
 def plot_power(ax, traj, color: str) -> np.ndarray:
     """P_loc solid and |P|_loc dashed over time [W]; returns |P|_loc (empty: "no steps").
-
-    Helper: one panel of fig. 7.
     """
     t = common.step_times(traj)
     if len(t) == 0:

@@ -23,7 +23,7 @@ LIMIT_VIEW = 1.3  # the y scale shows at least +-1.3 tau_max
 def tau_column(model, joint: str) -> int:
     """Column of ``traj.tau`` that holds joint ``joint`` (tau holds the revolute joints in body order).
 
-    Helper: maps a joint name to its torque column without hard-coding COBRA's numbering.
+    Maps a joint name to its torque column without hard-coding COBRA's numbering.
     """
     revolute = [i for i, jt in enumerate(model.joint_type) if jt != "free"]
     return revolute.index(model.joint_names.index(joint))
@@ -32,7 +32,7 @@ def tau_column(model, joint: str) -> int:
 def torque_note(tau: np.ndarray, clipped: bool) -> str:
     """The numbers above a panel, e.g. "|tau|: p99 8.1, peak 37.2 N m (clipped)".
 
-    Helper: fig. 8's annotation (99th percentile and peak of |tau| [N m]).
+    Fig. 8's annotation (99th percentile and peak of |tau| [N m]).
     """
     if not len(tau):
         return ""
@@ -42,8 +42,6 @@ def torque_note(tau: np.ndarray, clipped: bool) -> str:
 
 def plot_torque(ax, t: np.ndarray, tau: np.ndarray, color: str) -> None:
     """tau(t) [N m], min-max decimated.
-
-    Helper: one panel of fig. 8.
     """
     if len(t) == 0:
         common.empty_panel(ax, "no steps")
@@ -56,7 +54,7 @@ def draw_limits(axes, limit: float) -> None:
     """The limits +-``limit`` [N m] dotted and the region beyond them shaded on every axes, the y
     scale widened to at least +-``LIMIT_VIEW`` x limit.
 
-    Helper: fig. 8's actuator limit (call it after the y scale is set).
+    Fig. 8's actuator limit (call it after the y scale is set).
     """
     if not (axes and np.isfinite(limit)):
         return

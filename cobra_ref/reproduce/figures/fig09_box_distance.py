@@ -31,7 +31,7 @@ def distance_unit(finals: list[float]) -> tuple[float, str]:
     """(scale, unit) of the figure's distances: (1, "m"), or (1000, "mm") when every final
     distance is below ``MM_BELOW``.
 
-    Helper: fig. 9's unit; a value in metres times scale is in unit.
+    Fig. 9's unit; a value in metres times scale is in unit.
     """
     return (1e3, "mm") if max((abs(d) for d in finals), default=0.0) < MM_BELOW else (1.0, "m")
 
@@ -40,7 +40,7 @@ def distance_labels(values: list[float], unit: str) -> list[str]:
     """Bar labels "<value> <unit>", in the axis's unit, with three significant digits of the
     largest value (2.56 m and 0.33 m; 6.92 mm and 2.15 mm), never in powers of ten.
 
-    Helper: fig. 9's bar labels; the decimals are 2 - floor(log10(largest)), at least 0.
+    Fig. 9's bar labels; the decimals are 2 - floor(log10(largest)), at least 0.
     """
     largest = max((abs(d) for d in values), default=0.0)
     decimals = max(0, 2 - int(np.floor(np.log10(largest)))) if largest > 0 else 2
@@ -50,8 +50,6 @@ def distance_labels(values: list[float], unit: str) -> list[str]:
 def plot_finals(ax, rows, finals: np.ndarray, unit: str, scale: float, ensemble: dict | None) -> None:
     """Bars of the nominal runs' final distances (in ``unit``: metres x ``scale``), labelled; with
     an ensemble, each gait's members beside its bar.
-
-    Helper: fig. 9's middle panel.
     """
     colors = [common.gait_color(g) for g, _ in rows]
     spread = any(len(common.ensemble_values(ensemble, g, "box_distance")) for g, _ in rows)
@@ -80,7 +78,7 @@ def plot_paths(ax, rows, unit: str, scale: float) -> None:
     """The box's horizontal displacement x_box(t) - x_box(0) per gait (top view, equal scale), in
     ``unit`` (metres x ``scale``).
 
-    Helper: the direction in which each gait pushed the box.
+    The direction in which each gait pushed the box.
     """
     for gait, traj in rows:
         d = scale * (traj.box_pose[:, :2] - traj.box_pose[0, :2])

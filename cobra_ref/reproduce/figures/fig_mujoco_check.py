@@ -1,11 +1,11 @@
 """The MuJoCo comparison as a picture: the robot's travel without the box, and the box ensembles.
 
-Helper: the figure of ``reproduce.mujoco_check``. Top: for each gait, the travel of the robot's
-centre of mass (no box) in cobra_ref and in MuJoCo, as bars of its length with the relative
-difference |d_MuJoCo - d_ours| / |d_ours| and the verdict against the 10 % band written above
-them. Bottom: one panel per gait of the box ensembles, each member's box displacement as a dot
-(cobra_ref and MuJoCo), three panels to a row, with the length and direction ranges of the
-overlap rule and its verdict. The rules are stated in words above the panels.
+The figure of ``reproduce.mujoco_check``. Top: for each gait, the travel of the robot's centre of
+mass (no box) in cobra_ref and in MuJoCo, as bars of its length with the relative difference
+|d_MuJoCo - d_ours| / |d_ours| and the verdict against the 10 % band written above them. Bottom: one
+panel per gait of the box ensembles, each member's box displacement as a dot (cobra_ref and MuJoCo),
+three panels to a row, with the length and direction ranges of the overlap rule and its verdict. The
+rules are stated in words above the panels.
 """
 
 from __future__ import annotations
@@ -25,8 +25,6 @@ OURS, MUJOCO = "tab:blue", "tab:orange"
 def make(rows: list[dict], out_dir: str) -> list[str]:
     """Write ``fig_mujoco_check.png`` / ``.pdf`` from the rows of ``robot_travel_rows`` and
     ``box_ensemble_rows`` (either may be missing); return the paths.
-
-    Helper: the MuJoCo comparison figure (module docstring).
     """
     travel = [r for r in rows if r["kind"] == "travel"]
     boxes = dict(ordered({r["gait"]: r for r in rows if r["kind"] == "box"}))

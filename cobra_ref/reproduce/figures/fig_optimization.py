@@ -1,7 +1,8 @@
 """The single-shooting optimizations as pictures: cost histories and the box's path to each goal.
 
-Helper: the figures of the single-shooting optimizations (assumption A17). ``make`` draws, for a set of optimized runs
-(one params JSON of ``cobra-ref optimize`` each, with the box path its optimum recorded):
+The figures of the single-shooting optimizations (assumption A17). ``make`` draws, for a set of
+optimized runs (one params JSON of ``cobra-ref optimize`` each, with the box path its optimum
+recorded):
 
 * left: the cost of every rollout in evaluation order (dots) and the best so far (line), per run;
 * right: top view of the box's path over the horizon under the optimum (line), relative to its
@@ -22,8 +23,6 @@ from . import common
 def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
     """Write ``stem.png`` / ``.pdf``; ``runs``: dicts with ``label``, ``gait``, ``record`` (the
     params JSON as read by ``shooting.load_result``) and ``box_xy`` ((n, 2) box path of the optimum's rollout).
-
-    Helper: the optimization figures (module docstring).
     """
     fig = common.new_figure(common.TWO_COLUMN, 3.0)
     ax_cost, ax_path = fig.subplots(1, 2)
