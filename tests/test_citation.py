@@ -55,13 +55,13 @@ def test_citation_cites_the_paper_with_its_six_authors_in_order():
 
 
 def test_one_version_string_everywhere():
-    """__version__ is the only place the version is written; pyproject reads it, CITATION.cff and
+    """provenance.__version__ is the only place the version is written; pyproject reads it, CITATION.cff and
     the changelog repeat it."""
     version = cobra_ref.__version__
     assert version == "0.2.0.dev0"
     pyproject = read("pyproject.toml")
     assert re.search(r'^dynamic = \["version"\]', pyproject, re.MULTILINE)
-    assert re.search(r'^version = \{ attr = "cobra_ref.__version__" \}', pyproject, re.MULTILINE)
+    assert re.search(r'^version = \{ attr = "cobra_ref.provenance.__version__" \}', pyproject, re.MULTILINE)
     assert not re.search(r'^version = "', pyproject, re.MULTILINE), "a second, static version in pyproject.toml"
     assert re.search(rf"^version: {re.escape(version)}$", read("CITATION.cff"), re.MULTILINE)
     assert f"({version})" in read("CHANGELOG.md")
