@@ -1,5 +1,9 @@
 """MJCF export of a cobra_ref Model, written with xml.etree only (mujoco is not needed to write it).
 
+``to_mjcf`` is the physics twin; ``playable_mjcf`` adds a keyframe ``start`` (a pose at rest and
+the ctrl that holds it) and a checker ground, for opening the file in MuJoCo's viewer
+(``cobra-ref export-mjcf``, docs/mujoco.md).
+
 Implements: the MuJoCo twin of the model, with the compliant contact law (assumptions A12, A13,
 A22), the position servo (A7) and the mapping of assumption A27 ([MJ] = MuJoCo documentation,
 "Computation" / "Parameters" and "Modeling" / "Solver parameters", "Contact parameters").
@@ -58,6 +62,7 @@ IMPEDANCE = 1e-4  # d: MuJoCo's smallest impedance (mjMINIMP); its force is then
 IMPRATIO = 1e6  # R_T = R / IMPRATIO: hard friction rows, the cone keeps the normal force (A27)
 TIMESTEP = 1e-4  # [s] MuJoCo integrates the contact force explicitly; measured in docs/mujoco.md (A27)
 GROUND = "ground"
+KEY = "start"  # the keyframe of ``playable_mjcf``
 _AXIS = {"Rx": "1 0 0", "Ry": "0 1 0", "Rz": "0 0 1"}
 _NO_COLLISION = {"contype": "0", "conaffinity": "0"}  # every contact comes from an explicit <pair>
 
@@ -197,3 +202,40 @@ def _pair_attributes(model: Model, A_hat: float, mu: float) -> dict:
     return {"condim": "3", "friction": _f([mu, mu, 0.0, 0.0, 0.0]),
             "solref": _f([-model.contact_stiffness * (1 - d) * A_hat, -model.contact_damping * (1 - d) * A_hat]),
             "solreffriction": _f([0.0, -d * b_T]), "solimp": _f([d, d, 0.001, 0.5, 2.0])}
+
+
+def joint_angles(model: Model, q) -> np.ndarray:
+    """The hinge angles of ``q`` in actuator order (the order of ``model.joint_type``'s hinges).
+
+    The ``ctrl`` that holds the pose ``q``: a position actuator's force kp (ctrl - q) - kv qd is
+    0 at ctrl = q, qd = 0 (A7).
+    """
+    q = np.asarray(q, dtype=float)
+    return np.array([q[model.q_idx[i].start] for i, jt in enumerate(model.joint_type) if jt != "free"])
+
+
+def playable_mjcf(model: Model, q, timestep: float = TIMESTEP) -> str:
+    """``to_mjcf(model)`` with what opening it in MuJoCo's viewer needs: a keyframe ``start``
+    (qpos = ``q``, ctrl = its joint angles, qvel = 0), a checker-textured ground and an orange box.
+
+    Implements: the pose ``q`` as a state MuJoCo can reset to (``mj_resetDataKeyframe``); with a
+    settled ``q`` (A25) the robot and the box rest on the ground from there, the joints held
+    where they are. The physics is ``to_mjcf``'s: only visual attributes and the key are added.
+    """
+    q = model.check_q(q)
+    parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True))
+    root = ET.fromstring(to_mjcf(model, timestep), parser=parser)
+    asset = ET.Element("asset")
+    ET.SubElement(asset, "texture", name="floor", type="2d", builtin="checker", rgb1="0.7 0.7 0.7",
+                  rgb2="0.55 0.55 0.55", width="64", height="64")
+    ET.SubElement(asset, "material", name="floor", texture="floor", texrepeat="5 5", texuniform="true")
+    root.insert(list(root).index(root.find("worldbody")), asset)
+    for geom in root.iter("geom"):
+        if geom.get("name") == GROUND:
+            geom.set("material", "floor")
+        elif geom.get("name", "").startswith("box_"):
+            geom.set("rgba", "0.9 0.5 0.15 1")
+    keyframe = ET.SubElement(root, "keyframe")
+    ET.SubElement(keyframe, "key", name=KEY, qpos=_f(q), ctrl=_f(joint_angles(model, q)))
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode")

@@ -1,5 +1,6 @@
-"""`cobra-ref figures --quick`: the outputs exist, the claims' numbers are computed (one is
-recomputed here by hand from the cached NPZ), the cache is reused, and bad input is refused."""
+"""`cobra-ref figures --quick`: the outputs exist and say they are a smoke run, the claims' numbers are
+computed (one is recomputed here by hand from the cached NPZ), the cache is reused, --check refuses
+a smoke run, and bad input is refused."""
 
 import glob
 import json
@@ -17,9 +18,9 @@ from cobra_ref.simulate import Trajectory
 
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
-    """One quick regeneration (5 gaits x 1 s at their default parameters, one member each, on both cores, figures,
-    claims; no MuJoCo here: tests/test_mujoco_rollout.py covers it, and the optimization figure is
-    tested in tests/test_shooting.py)."""
+    """One quick regeneration (5 gaits x 1 s at dt = 2 ms at their default parameters, one member each, on
+    both cores, figures, claims; no MuJoCo here: tests/test_mujoco_rollout.py covers it, and the
+    optimization figure is tested in tests/test_shooting.py)."""
     out = str(tmp_path_factory.mktemp("figures"))
     assert main(["figures", "--quick", "--no-mujoco", "--defaults", "--members", "1", "--quiet", "--out", out]) == 0
     return out
@@ -29,18 +30,46 @@ def test_every_output_is_written(quick_run):
     names = [f"fig0{i}_{s}" for i, s in zip(range(3, 10), ("snapshots", "robot_contacts", "box_contacts",
                                                               "work_efficiency", "power", "torques", "box_distance"))]
     for name in names:
-        for ext, magic in ((".png", b"\x89PNG"), (".pdf", b"%PDF")):
-            with open(os.path.join(quick_run, name + ext), "rb") as f:
-                assert f.read(4) == magic, name + ext
+        with open(os.path.join(quick_run, name + ".png"), "rb") as f:
+            assert f.read(4) == b"\x89PNG", name
+        assert not os.path.exists(os.path.join(quick_run, name + ".pdf")), "a smoke run writes the PNG only"
     for gait in ("C", "S", "J", "J-mirror", "sidewinding"):
         with open(os.path.join(quick_run, f"anim_{gait}.gif"), "rb") as f:
             assert f.read(6) == b"GIF89a"
     assert not glob.glob(os.path.join(quick_run, ".tmp_*")), "a temporary file was left behind"
 
 
+def test_every_report_says_it_is_a_smoke_run_on_its_first_line(quick_run):
+    for name in ("claims.json", "summary.json", "claims.md"):
+        with open(os.path.join(quick_run, name)) as f:
+            assert "SMOKE RUN (cobra-ref figures --quick)" in f.readline(), name
+    for name in ("claims.json", "summary.json"):
+        with open(os.path.join(quick_run, name)) as f:
+            assert next(iter(json.load(f))) == "smoke run", name
+
+
+def test_check_refuses_a_quick_run_and_a_smoke_report(quick_run, capsys):
+    from cobra_ref.reproduce.check import read_committed
+
+    with pytest.raises(SystemExit) as exc:
+        main(["figures", "--quick", "--check", "--quiet", "--out", quick_run])
+    assert exc.value.code == 2 and "a --quick run is a smoke run and cannot be compared" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="is a smoke run's report"):
+        read_committed(os.path.join(quick_run, "claims.json"))
+
+
+def test_a_quick_run_defaults_to_one_member_and_no_mujoco_a_full_one_does_not():
+    from cobra_ref.reproduce.regenerate import MEMBERS, FiguresOptions, smoke_note
+
+    quick, full = FiguresOptions(quick=True), FiguresOptions()
+    assert (quick.n_members, quick.mujoco) == (1, False) and (full.n_members, full.mujoco) == (MEMBERS, True)
+    assert FiguresOptions(quick=True, n_members=3, mujoco=True).n_members == 3
+    assert smoke_note(full) is None and "no MuJoCo comparison" in smoke_note(quick)
+
+
 def test_claims_json_has_the_issue_keys(quick_run):
     with open(os.path.join(quick_run, "claims.json")) as f:
-        claims = json.load(f)
+        claims = json.load(f)["claims"]
     assert [c["id"] for c in claims] == ["E", "WB", "EN", "PP", "SP", "SL", "MJ", "MJ-C", "NI", "TL", "PS", "GT"]
     for c in claims:
         assert set(c) - {"statistics"} == {"id", "claim", "values", "holds", "verdict", "ensemble", "details"}
@@ -55,7 +84,7 @@ def test_work_on_the_box_recomputed_by_hand_from_the_npz(quick_run):
     """Claim WB's number for J, recomputed from the cached trajectory with an explicit loop:
     W_box = sum over robot-box rows of (-f) . (v + omega x (p - x_box)) dt (assumption A18)."""
     with open(os.path.join(quick_run, "claims.json")) as f:
-        wb = next(c for c in json.load(f) if c["id"] == "WB")
+        wb = next(c for c in json.load(f)["claims"] if c["id"] == "WB")
     path, = glob.glob(os.path.join(quick_run, ".cache", "J-" + "?" * 16 + ".npz"))  # not J-mirror-...
     traj = Trajectory.from_npz(path)
     c, total = traj.contacts, 0.0

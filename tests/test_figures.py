@@ -543,3 +543,19 @@ def test_nothing_is_cut_at_the_figures_edge(gaits, results, ensemble, cobra, tmp
         grey = np.asarray(Image.open(path).convert("L"))
         border = np.concatenate([grey[:2].ravel(), grey[-2:].ravel(), grey[:, :2].ravel(), grey[:, -2:].ravel()])
         assert (border < 200).sum() == 0, f"{os.path.basename(path)}: {(border < 200).sum()} dark pixels on the edge"
+
+
+def test_a_smoke_run_marks_each_figure_and_writes_the_png_only(tmp_path):
+    """Inside ``common.smoke_run(note)`` (``cobra-ref figures --quick``) the note is the title's first
+    line and only the PNG is written; outside it, the title is untouched and both files are written."""
+    fig = common.new_figure(common.ONE_COLUMN, 2.0)
+    fig.subplots().plot([0, 1], [0, 1])
+    fig.suptitle("Instantaneous locomotion power")
+    with common.smoke_run("SMOKE RUN: not the paper's results"):
+        paths = common.save(fig, str(tmp_path / "smoke"), "f")
+    assert [os.path.basename(p) for p in paths] == ["f.png"] and os.listdir(tmp_path / "smoke") == ["f.png"]
+    assert fig._suptitle.get_text() == "SMOKE RUN: not the paper's results\nInstantaneous locomotion power"
+    plain = common.new_figure(common.ONE_COLUMN, 2.0)
+    plain.suptitle("power")
+    assert [os.path.basename(p) for p in common.save(plain, str(tmp_path / "full"), "f")] == ["f.png", "f.pdf"]
+    assert plain._suptitle.get_text() == "power"

@@ -190,6 +190,9 @@ class FakeViewer:
 
         return contextlib.nullcontext()
 
+    def close(self):
+        self.left = 0
+
     def set_texts(self, texts):
         self.texts.append(texts)
 

@@ -9,11 +9,17 @@
 # **Run:** `python tutorials/02_rnea_crba.py`
 
 # %%
+import os
+import pathlib
+
 import matplotlib.pyplot as plt
 import numpy as np
 
 import cobra_ref as cr
 
+# pictures go to an ignored folder beside the tutorials (or to $COBRA_REF_OUT)
+OUT = pathlib.Path(os.environ.get("COBRA_REF_OUT", pathlib.Path(__file__).resolve().parent / "out"))
+OUT.mkdir(parents=True, exist_ok=True)
 np.set_printoptions(precision=4, suppress=True)
 rng = np.random.default_rng(0)
 
@@ -226,6 +232,7 @@ ax.set_ylabel("row i: index into qd")
 ax.set_title("COBRA + box: log10 |M_ij(q)| at a random q")
 fig.colorbar(image, ax=ax, label="log10 |M_ij|  (M_ij in kg, kg m or kg m^2)")
 fig.tight_layout()
+fig.savefig(OUT / "02_mass_matrix.png", dpi=120)
 
 # %% [markdown]
 # ## 15. What we just verified
@@ -256,4 +263,6 @@ np.testing.assert_allclose(h_rest[:3], [0.0, 0.0, m_robot * 9.81], atol=1e-10, e
 np.testing.assert_allclose(h_rest[17:], [0, 0, params.box_mass * 9.81, 0, 0, 0], atol=1e-12,
                            err_msg="box weight")
 print("All RNEA/CRBA checks passed.")
-plt.show()
+# a window on an interactive backend; headless (Agg) the PNGs in OUT are the pictures
+if plt.get_backend().lower() not in ("agg", "pdf", "ps", "svg", "pgf", "cairo", "template"):
+    plt.show()

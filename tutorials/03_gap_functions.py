@@ -12,6 +12,8 @@
 
 # %%
 import itertools
+import os
+import pathlib
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -24,6 +26,9 @@ from cobra_ref.kinematics import forward_kinematics
 from cobra_ref.quaternion import rot_to_quat
 from cobra_ref.start import placed_state
 
+# pictures go to an ignored folder beside the tutorials (or to $COBRA_REF_OUT)
+OUT = pathlib.Path(os.environ.get("COBRA_REF_OUT", pathlib.Path(__file__).resolve().parent / "out"))
+OUT.mkdir(parents=True, exist_ok=True)
 np.set_printoptions(precision=4, suppress=True)
 rng = np.random.default_rng(0)
 e_x, e_y, e_z = np.eye(3)
@@ -221,6 +226,7 @@ ax.set_ylabel("y [m]")
 ax.set_title("sphere-box gaps: witness points and normals")
 ax.legend(loc="lower left", fontsize=7)
 fig.tight_layout()
+fig.savefig(OUT / "03_sphere_box_gaps.png", dpi=120)
 
 # %% [markdown]
 # ## 6. Now the robot: COBRA next to the box
@@ -468,4 +474,6 @@ assert abs(gd_J) > 0.05, "the box alone moving changes the gap (dg/dt != 0)"
 np.testing.assert_allclose(W_T[kinds == 0][:, iv_box], 0.0, atol=0, err_msg="robot-ground rows ignore the box")
 np.testing.assert_allclose(W_T[kinds == 2][:, :iv_box.start], 0.0, atol=0, err_msg="box-ground rows ignore the robot")
 print("All gap and contact-Jacobian checks passed.")
-plt.show()
+# a window on an interactive backend; headless (Agg) the PNGs in OUT are the pictures
+if plt.get_backend().lower() not in ("agg", "pdf", "ps", "svg", "pgf", "cairo", "template"):
+    plt.show()

@@ -205,4 +205,6 @@ np.testing.assert_allclose(impacts["impacts_per_second"], len(onset) / T)
 assert traj.steps["fp_converged"].all() and not traj.error
 assert 0.7 < first_push < T and W_box[-1] > 0 and W_loc[-1] > 0
 print("All trajectory checks passed.")
-plt.show()
+# a window on an interactive backend; headless (Agg) the PNGs in OUT are the pictures
+if plt.get_backend().lower() not in ("agg", "pdf", "ps", "svg", "pgf", "cairo", "template"):
+    plt.show()

@@ -231,4 +231,6 @@ assert entries[1.0]["cost"] < entries[0.5]["cost"]  # rolling faster brings the 
 assert entries[1.0]["box_distance_to_goal"] < entries[0.5]["box_distance_to_goal"]
 for e in entries.values():
     assert e["contact"]["max_cone_residual"] < 1e-6 and e["contact"]["max_q_excess"] <= 0.0
-plt.show()
+# a window on an interactive backend; headless (Agg) the PNGs in OUT are the pictures
+if plt.get_backend().lower() not in ("agg", "pdf", "ps", "svg", "pgf", "cairo", "template"):
+    plt.show()

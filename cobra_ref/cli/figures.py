@@ -10,6 +10,8 @@ import sys
 from .common import c_stdout_silenced
 from ..infra.validation import RULES
 
+FULL_OUT, QUICK_OUT = "figures", "figures-quick"  # the default output directories
+
 
 def cmd_figures(args) -> int:
     """Regenerate figures 3-9, the GIFs and the claims report.
@@ -21,19 +23,26 @@ def cmd_figures(args) -> int:
     unknown = [g for g in gaits if g not in PAPER_GAITS]
     if unknown:
         raise SystemExit(f"error: unknown gait(s) {', '.join(unknown)}; gaits: {', '.join(PAPER_GAITS)}")
-    committed = _committed_claims(args.out) if args.check else None
+    if args.quick and args.check:
+        sys.stderr.write("error: --check compares a full run with the committed full results; a --quick run is a "
+                         "smoke run and cannot be compared (drop --quick, or --check)\n")
+        raise SystemExit(2)
+    out = args.out or (QUICK_OUT if args.quick else FULL_OUT)
+    committed = _committed_claims(out) if args.check else None
     try:
-        check_output_dir(args.out)
+        check_output_dir(out)
     except OSError as exc:
         raise SystemExit(f"error: {exc}")
     with c_stdout_silenced():
-        options = FiguresOptions(quick=args.quick, force=args.force, mujoco=not args.no_mujoco, gaits=gaits,
+        mujoco = True if args.mujoco else (False if args.no_mujoco else None)
+        options = FiguresOptions(quick=args.quick, force=args.force, mujoco=mujoco, gaits=gaits,
                                  n_members=args.members, optimized_dir=None if args.defaults else OPTIMIZED_DIR,
                                  reoptimize_all=args.reoptimize)
-        result = regenerate(args.out, options, cache_dir=args.cache, workers=args.jobs, progress=not args.quiet)
-    summary = {"out": args.out, "files": len(result["files"]),
-               "claims": {c["id"]: c.get("verdict", c["holds"]) for c in result["claims"]},
-               "seconds": round(result["seconds"], 1)}
+        result = regenerate(out, options, cache_dir=args.cache, workers=args.jobs, progress=not args.quiet)
+    summary = {"smoke run": True} if args.quick else {}
+    summary |= {"out": out, "files": len(result["files"]),
+                "claims": {c["id"]: c.get("verdict", c["holds"]) for c in result["claims"]},
+                "seconds": round(result["seconds"], 1)}
     status = 0
     if committed is not None:
         status = check_report(committed, result["claims"])
@@ -90,30 +99,39 @@ def add_parsers(sub) -> None:
     """
     p = sub.add_parser("figures", help="regenerate the paper's figures 3-9, GIFs and the claims report",
                        description="Simulate the five gaits, each as an ensemble of --members runs (member 0: 10 s, "
-                                   "the others 6 s; 1 s each with --quick; with the optimized "
+                                   "the others 6 s; with the optimized "
                                    "parameters of cobra_ref/optimized/ where present) on all cores, or read "
                                    "them from the cache, and write fig03_snapshots.png ... fig09_box_distance.png "
-                                   "(+ PDF), anim_<gait>.gif, claims.json, claims.md and summary.json to --out. "
+                                   "(+ PDF), anim_<gait>.gif, claims.json, claims.md and summary.json to --out, "
+                                   "with the MuJoCo comparison. --quick is a smoke run of the same pipeline in "
+                                   "about a minute: 1 s runs, 1 member per gait, no MuJoCo comparison, PNG only, "
+                                   "every output marked as a smoke run on its first line. "
                                    "Prints a one-line JSON summary.")
-    p.add_argument("--out", default="figures", help="output directory (default figures)")
-    p.add_argument("--quick", action="store_true", help="1 s simulations instead of 10 s (for tests)")
+    p.add_argument("--out", default=None, help=f"output directory (default {FULL_OUT}, {QUICK_OUT} with --quick)")
+    p.add_argument("--quick", action="store_true",
+                   help="a smoke run: 1 s simulations, 1 member per gait (unless --members), no MuJoCo comparison "
+                        "(unless --mujoco), PNG only, outputs marked as a smoke run; never compared by --check")
     p.add_argument("--force", action="store_true", help="ignore the cache: simulate and draw everything again")
     p.add_argument("--cache", default=None, help="simulation cache directory (default OUT/.cache)")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: the number of cores)")
     p.add_argument("--gaits", default=None, help="comma-separated subset of C,S,J,J-mirror,sidewinding")
-    p.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo rollout cross-check")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo rollout cross-check")
+    where.add_argument("--mujoco", action="store_true",
+                       help="make the MuJoCo rollout cross-check with --quick too (a full run makes it anyway)")
     p.add_argument("--defaults", action="store_true",
                    help="simulate every gait with its default parameters instead of the optimized ones "
                         "committed in cobra_ref/optimized/")
     p.add_argument("--reoptimize", action="store_true",
                    help="first re-run 'cobra-ref optimize' for every gait and the three direction goals, into "
                         "OUT/optimized/, and use those")
-    p.add_argument("--members", type=RULES["members"].arg("--members"), default=8,
+    p.add_argument("--members", type=RULES["members"].arg("--members"), default=None,
                    help="ensemble members per gait: member 0 is the figure run, the others are perturbed "
-                        "starts, phases and frictions judged over the first 6 s (default 8)")
+                        "starts, phases and frictions judged over the first 6 s (default 8, 1 with --quick)")
     p.add_argument("--check", action="store_true",
                    help="compare the regenerated claims with OUT/claims.json as it was before the run: "
                         "exit 1 with a table of mismatches when a verdict differs or a statistic leaves the "
-                        "committed ensemble's spread, 2 when there is no claims.json")
+                        "committed ensemble's spread, 2 when there is no claims.json, when it is a smoke run's "
+                        "or with --quick (a full run only)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_figures)

@@ -49,16 +49,41 @@ def cmd_info(args) -> int:
 
 
 def cmd_export_mjcf(args) -> int:
-    """Write the COBRA + box scene as MJCF (atomically: nothing half-written on failure; through a
-    symbolic link to its target; a directory or a device is refused, see :mod:`cobra_ref.infra.output`).
+    """Write the COBRA + box scene as MJCF with a keyframe ``start`` (atomically: nothing
+    half-written on failure; through a symbolic link to its target; a directory or a device is
+    refused, see :mod:`cobra_ref.infra.output`).
     """
-    from ..mjcf import to_mjcf
+    from ..mjcf import playable_mjcf
 
     check_out(args.out, "OUT.xml")  # before any work: exact name, a regular file (or a link to one)
-    xml = to_mjcf(cobra_model(with_box=not args.no_box), timestep=args.timestep)
+    model = cobra_model(with_box=not args.no_box)
+    q, source = start_pose(args, model)
+    xml = playable_mjcf(model, q, timestep=args.timestep)
     write_text_atomic(args.out, xml, "OUT.xml")
-    print(f"wrote {args.out} ({len(xml)} bytes)")
+    print(f"wrote {args.out} ({len(xml)} bytes; keyframe 'start': {source})")
     return 0
+
+
+def start_pose(args, model) -> tuple[np.ndarray, str]:
+    """(q, what it is) of the export's keyframe: the state of ``--from`` at ``--at`` (the robot's
+    part of it with ``--no-box``), or the settled start of the C gait (A25).
+    """
+    if args.source is None:
+        if args.at is not None:
+            raise SystemExit("error: --at needs --from RUN.npz")
+        from ..gaits import gait
+        from ..start import initial_state
+
+        return initial_state(model, gait("C"))[0], "the settled start of the C gait"
+    from ..viz.scene import state_indices
+    from .view import read_run
+
+    traj = read_run(args.source)
+    at = 0.0 if args.at is None else args.at
+    if at > traj.duration:
+        raise SystemExit(f"error: --at {at:g} s is outside the run (0 to {traj.duration:g} s)")
+    k = int(state_indices(traj, [traj.t[0] + at])[0])
+    return traj.q[k][:model.nq], f"{args.source} at t = {traj.t[k] - traj.t[0]:.4f} s"
 
 
 def add_parsers(sub) -> None:
@@ -66,10 +91,21 @@ def add_parsers(sub) -> None:
     """
     p = sub.add_parser("info", help="print the model with the source of every number")
     p.set_defaults(func=cmd_info)
-    p = sub.add_parser("export-mjcf", help="write the model as MuJoCo MJCF XML")
+    p = sub.add_parser("export-mjcf", help="write the model as MuJoCo MJCF XML, with a keyframe to start from",
+                       description="Write COBRA and the box as MJCF for MuJoCo (the same bodies, contact law and "
+                                   "servo, A27), with a checker ground and a keyframe 'start': qpos = a state at "
+                                   "rest on the ground, ctrl = its joint angles (the servo holds them), qvel = 0. "
+                                   "The state is the settled start of the C gait (A25: the start every "
+                                   "'cobra-ref simulate' run of C begins from), or the state of --from RUN.npz at "
+                                   "--at. Open it with: python -m mujoco.viewer --mjcf=OUT.xml, then load the key "
+                                   "(the Simulation panel's Load key, with Key on 0).")
     p.add_argument("out", metavar="OUT.xml", help="output file, written under exactly this name (a symbolic link: "
                                                   "its target; never a directory or a device)")
     p.add_argument("--timestep", type=RULES["timestep"].arg("--timestep"), default=TIMESTEP,
                    help=f"MuJoCo timestep [s] (default {TIMESTEP:g}: the exported stiff contact needs it, A27)")
     p.add_argument("--no-box", action="store_true", help="export the robot alone")
+    p.add_argument("--from", dest="source", metavar="RUN.npz", default=None,
+                   help="take the keyframe from this run (of cobra-ref simulate --out) instead of the C gait's start")
+    p.add_argument("--at", type=RULES["at"].arg("--at"), default=None,
+                   help="time [s] from the run's start of the --from state (default 0; the nearest state)")
     p.set_defaults(func=cmd_export_mjcf)

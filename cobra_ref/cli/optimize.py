@@ -113,8 +113,11 @@ def cmd_optimize(args) -> int:
                                    cobra=model_parameters(args))
         except (ShootingError, ValidationError) as exc:
             raise SystemExit(f"error: {exc}") from None
+        two = args.companion and problem.weights.impact > 0
         err(f"optimize {args.gait}: goal {goal} m from the box's start {np.round(problem.box_pose0[:2], 4)}, "
-            f"{len(problem.names)} parameters ({', '.join(problem.names)}), {duration} s rollouts, maxiter {maxiter}")
+            f"{len(problem.names)} parameters ({', '.join(problem.names)}), {duration} s rollouts, maxiter {maxiter}; "
+            + ("two searches: J, then the companion without the impact term (--no-companion skips it)" if two
+               else "one search: J"))
         search = SearchOptions(method=args.method, maxiter=maxiter, seed=args.seed, popsize=args.popsize,
                                companion=args.companion)
         result = optimize(problem, search, progress=None if args.quiet else err,

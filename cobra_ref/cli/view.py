@@ -46,11 +46,11 @@ def cmd_view(args) -> int:
                          f"Render the run to a file instead: cobra-ref render {args.run} --out run.mp4 "
                          f"(or run.gif, or --at 2.5 --out still.png)")
     try:
-        frames = view.replay(traj, speed=args.speed, loop=not args.once, follow=not args.no_follow,
-                             force_scale=args.force_scale)
+        shown = view.replay(traj, speed=args.speed, loop=not args.once, follow=not args.no_follow,
+                            force_scale=args.force_scale)
     except RuntimeError as exc:  # e.g. macOS, where launch_passive needs mjpython
         raise SystemExit(f"error: the viewer could not start: {exc}") from None
-    print(json.dumps({"run": args.run, "frames_shown": frames}))
+    print(json.dumps({"run": args.run, **shown}))
     return 0
 
 
@@ -93,11 +93,13 @@ def add_parsers(sub) -> None:
                        description="Replay RUN.npz (from `cobra-ref simulate --out`) in MuJoCo's viewer on the "
                                    "exported MJCF: the states of the run (nothing is simulated), the contact "
                                    "points and force arrows of its contact log (green robot-ground, red robot-box, "
-                                   "blue box-ground), the box's path and the time. Space pauses.")
+                                   "blue box-ground), the box's path and the time. Space pauses. Prints one JSON line on exit: "
+                                   "the number of frames shown and the last time shown.")
     p.add_argument("run", metavar="RUN.npz", help="a run written by cobra-ref simulate --out")
     p.add_argument("--speed", type=RULES["speed"].arg("--speed"), default=1.0,
                    help="replay speed: 1 = real time (default), 0.25 = four times slower")
-    p.add_argument("--once", action="store_true", help="stop on the last state instead of starting again")
+    p.add_argument("--once", action="store_true",
+                   help="play the run once, then close the window and exit (default: start again at the end)")
     p.add_argument("--no-follow", action="store_true", help="keep the camera where it is (default: follow the robot)")
     p.add_argument("--force-scale", type=RULES["force_scale"].arg("--force-scale"), default=FORCE_SCALE,
                    help=f"arrow length per newton [m/N] (default {FORCE_SCALE:g})")

@@ -6,6 +6,7 @@ decision vector of ``planning.problem``; ``optimize`` explains the choice of met
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 import time
@@ -56,12 +57,15 @@ class _Evaluations:
     are deterministic, and ``index`` keeps each point's history entry.
     """
 
-    def __init__(self, problem: ShootingProblem, executor: Executor, progress, maxiter: int):
+    def __init__(self, problem: ShootingProblem, executor: Executor, progress, maxiter: int, width: int = 1):
         self.problem, self.executor, self.progress, self.maxiter = problem, executor, progress, maxiter
         self.history: list = []
         self.index: dict = {}
         self.label, self.search = "", "J"
         self.iteration, self.start = 0, time.perf_counter()
+        self.width = max(int(width), 1)  # rollouts that run at once
+        self.rollout_seconds = None  # the wall time of one rollout, measured on the first batch
+        self.after_first = None  # a callable(rollout_seconds) -> line, said after the first batch
 
     def best(self, cost=lambda e: e["cost"]) -> dict | None:
         """The history entry of least ``cost`` (default J; the first of equals)."""
@@ -80,7 +84,7 @@ class _Evaluations:
         (a Ctrl-C keeps what finished)."""
         xs = [np.asarray(x, dtype=float) for x in xs]
         new = list({_key(x): x for x in xs if _key(x) not in self.index}.values())
-        futures, done = [], []
+        futures, done, t0 = [], [], time.perf_counter()
         try:
             for x in new:
                 futures.append(self.executor.submit(evaluate, self.problem, x))
@@ -91,7 +95,12 @@ class _Evaluations:
                 f.cancel()
             self._record([f.result() for f in futures if f.done() and not f.cancelled() and f.exception() is None])
             raise
+        if new and self.rollout_seconds is None:
+            self.rollout_seconds = (time.perf_counter() - t0) / math.ceil(len(new) / self.width)
         self._record(done)
+        if done and self.after_first is not None and self.progress:
+            self.progress(self.after_first(self.rollout_seconds))
+            self.after_first = None
         self.index.update(zip(map(_key, new), done))
         return [self.index[_key(x)] for x in xs]
 
@@ -109,6 +118,47 @@ class _Evaluations:
         return (f"{self.label}iteration {it:>2}/{self.maxiter}: {len(entries)} rollouts, cost {b['cost']:.5g}, box to goal "
                 f"{_distance_text(b)}; best so far {best['cost']:.5g} ({_distance_text(best)}), "
                 f"{len(self.history)} rollouts, {time.perf_counter() - self.start:.0f} s")
+
+
+def search_budget(search: "SearchOptions", n: int, width: int = 1) -> tuple[int, int]:
+    """(at most how many rollouts, in how many waves of ``width`` parallel rollouts) one search
+    of ``search`` over ``n`` parameters makes: the compass search rolls out x0, then ``maxiter``
+    polls of 2n points; differential evolution ``maxiter`` + 1 generations of max(5, popsize n)
+    members. A wave lasts about one rollout, so waves x the time of a rollout estimates the search's."""
+    width = max(int(width), 1)
+    if search.method == "pattern":
+        return 1 + 2 * n * search.maxiter, 1 + search.maxiter * math.ceil(2 * n / width)
+    population = max(5, search.popsize * n)
+    return population * (search.maxiter + 1), (search.maxiter + 1) * math.ceil(population / width)
+
+
+def _announce(problem: ShootingProblem, search: "SearchOptions", evals: _Evaluations, searches: int) -> None:
+    """Say, through ``evals.progress``, which searches ``optimize`` runs and at most how many
+    rollouts each makes, and, once the first rollout is timed, about how long each takes
+    (``search_budget``: waves x the first rollout's wall time)."""
+    if not evals.progress:
+        return
+    n_max, waves = search_budget(search, len(problem.names), evals.width)
+    method = "compass search" if search.method == "pattern" else "differential evolution"
+    then = " (then search 2, the companion without the impact term)" if searches == 2 else ""
+    evals.progress(f"search 1 of {searches}: J, {method}{then}: at most {n_max} rollouts of {problem.duration:g} s "
+                   f"on {evals.width} worker(s); a time estimate follows the first rollout")
+
+    def estimate(seconds: float) -> str:
+        more = f", and up to {waves * seconds:.0f} s for search 2" if searches == 2 else ""
+        return f"first rollout: {seconds:.1f} s; estimated {waves * seconds:.0f} s for search 1{more}"
+
+    evals.after_first = estimate
+
+
+def _announce_companion(problem: ShootingProblem, search: "SearchOptions", evals: _Evaluations) -> None:
+    """Say that the companion search starts, with its most rollouts and estimated time."""
+    if evals.progress:
+        n_max, waves = search_budget(search, len(problem.names), evals.width)
+        seconds = evals.rollout_seconds or 0.0
+        evals.progress(f"search 2 of 2: J - w_I I, the companion without the impact term (the optimum's 'impacts' "
+                       f"comparison; --no-companion skips it): at most {n_max} rollouts, the points of search 1 "
+                       f"not run again; estimated up to {waves * seconds:.0f} s")
 
 
 def _key(x) -> tuple:
@@ -185,13 +235,16 @@ def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), 
     """
     own = executor is None
     executor = default_executor(workers) if own else executor
-    evals = _Evaluations(problem, executor, progress, search.maxiter)
+    evals = _Evaluations(problem, executor, progress, search.maxiter, _width(executor, workers if own else None))
     interrupted, message = False, ""
     run = _compass_search if search.method == "pattern" else _differential_evolution
+    companion = search.companion and problem.weights.impact > 0
     try:
+        _announce(problem, search, evals, 2 if companion else 1)
         message = run(problem, evals, search)
         iterations = evals.iteration
-        if search.companion and problem.weights.impact > 0:
+        if companion:
+            _announce_companion(problem, search, evals)
             evals.label, evals.search, evals.iteration = "without the impact term: ", "J - w_I I", 0
             message += "; without the impact term: " + run(problem, evals.without_impact, search)
     except KeyboardInterrupt:
@@ -208,6 +261,12 @@ def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), 
     return ShootingResult(problem, search.method, search.seed, int(search.maxiter), options, evals.history,
                           evals.best(), max(iterations - 1, 0), interrupted, message,
                           time.perf_counter() - evals.start, without_impact=unpenalized)
+
+
+def _width(executor: Executor, workers: int | None) -> int:
+    """How many rollouts ``executor`` runs at once: ``workers``, else its ``_max_workers`` (a process
+    pool's; 1 when it does not say, as for ``SerialExecutor``)."""
+    return int(workers or getattr(executor, "_max_workers", None) or 1)
 
 
 def compass_search(evaluate_batch, x0, lower, upper, maxiter: int, step: float = 0.25,

@@ -115,13 +115,19 @@ def read_committed(path: str) -> list[dict]:
     """The claim entries of the committed ``claims.json`` at ``path``.
 
     ``--check`` reads them before regenerating. Raises FileNotFoundError when there is no such file
-    and ValueError naming the file when it is not a list of claim entries.
+    and ValueError naming the file when it is not a list of claim entries, or when it is a smoke
+    run's report (``cobra-ref figures --quick``: an object whose first key is "smoke run"), which is
+    never compared.
     """
     with open(path, encoding="utf-8") as f:
         try:
             report = json.load(f)
         except ValueError as exc:
             raise ValueError(f"{path} is not JSON: {exc}") from None
+    if isinstance(report, dict) and "smoke run" in report:
+        raise ValueError(f"{path} is a smoke run's report (cobra-ref figures --quick), which cannot be compared: "
+                         "--check compares a full run with the committed full results; write those with "
+                         "'cobra-ref figures' (without --quick) first")
     if not isinstance(report, list) or not all(isinstance(e, dict) and "id" in e for e in report):
         raise ValueError(f"{path} is not a claims report (a list of entries with an 'id')")
     return report

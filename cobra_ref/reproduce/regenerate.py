@@ -32,6 +32,13 @@ need those two periods; sidewinding meets its box at about 1.5 s and pushes for 
 clean run then simulates 5 x 10 s figure runs and 35 x 6 s members, 260 simulated seconds. Why
 K = 4: ``mujoco_job``.
 
+A quick run (``quick``, ``cobra-ref figures --quick``) is a smoke run: 1 s runs at ``QUICK_DT`` =
+2 ms, ``QUICK_MEMBERS`` = 1 member per gait and no MuJoCo comparison unless asked for, the figures
+as PNG only; the first
+line of ``claims.md``, ``claims.json``, ``summary.json`` and of every figure's title says so
+(``smoke_note``), and ``check.read_committed`` refuses such a report. A full run computes the
+same whether or not quick runs were made.
+
 Every file is written atomically (temporary file + rename): an interrupted run leaves the
 previous outputs or none, never half a file.
 """
@@ -57,12 +64,17 @@ from .runs import PAPER_GAITS, RunSpec, run_all
 from .stamps import Stamps, clean, figure_stamp, say
 
 __all__ = ["DIRECTIONS", "ENSEMBLE_DURATION", "FULL_DURATION", "FiguresOptions", "MEMBERS", "MUJOCO_MEMBERS",
-           "OPTIMIZED_DIR", "QUICK_DURATION", "check_output_dir", "ensemble_report", "ensemble_specs",
-           "ensemble_summaries", "goal_directions", "optimized_files", "optimized_params", "regenerate",
-           "reoptimize", "specs_for", "window"]
+           "OPTIMIZED_DIR", "QUICK_DT", "QUICK_DURATION", "QUICK_MEMBERS", "SMOKE_KEY", "SMOKE_TITLE",
+           "check_output_dir", "ensemble_report", "ensemble_specs", "ensemble_summaries", "goal_directions",
+           "marked_json", "optimized_files", "optimized_params", "regenerate", "reoptimize", "smoke_note", "specs_for",
+           "window"]
 
 FULL_DURATION, QUICK_DURATION = 10.0, 1.0
+QUICK_DT = 2e-3  # [s] the time step of a quick (smoke) run: half the steps, within the stable range
 MEMBERS = 8  # members per gait (member 0: the figure run)
+QUICK_MEMBERS = 1  # members per gait of a quick (smoke) run, unless asked for more
+SMOKE_KEY = "smoke run"  # the first key of a quick run's claims.json and summary.json
+SMOKE_TITLE = "SMOKE RUN (cobra-ref figures --quick): not the paper's results"  # a quick run's figures' first line
 # [s] the other members' runs and the window every member is judged on: the default gaits' 2 s
 # phase-rate ramp and two 0.5 Hz periods after it (the steady-power and phase claims need two
 # periods after the ramp; sidewinding meets its box at about 1.5 s); the budget's lever
@@ -152,23 +164,29 @@ def goal_directions(files: dict) -> dict:
 
 @dataclass(frozen=True)
 class FiguresOptions:
-    """What ``regenerate`` makes and from what: ``quick`` (1 s runs), ``force`` (every run and
-    figure anew, the caches and stamps ignored), ``mujoco`` (the MuJoCo comparison), ``gaits``,
-    ``n_members`` (N >= 1 members per gait), ``params`` ({gait: gait parameters}; None = the
-    optima in ``optimized_dir``, or the defaults without one), ``optimized_dir`` (None: the
-    defaults, no optimization figures), ``reoptimize_all`` (step 0: re-run the optimizer into
-    ``OUT/optimized/`` and use those optima). ValueError for a bad ``n_members``."""
+    """What ``regenerate`` makes and from what: ``quick`` (a smoke run: 1 s runs, module
+    docstring), ``force`` (every run and figure anew, the caches and stamps ignored), ``mujoco``
+    (the MuJoCo comparison; None: with a full run, not with a quick one), ``gaits``,
+    ``n_members`` (N >= 1 members per gait; None: ``MEMBERS``, ``QUICK_MEMBERS`` with ``quick``),
+    ``params`` ({gait: gait parameters}; None = the optima in ``optimized_dir``, or the defaults
+    without one), ``optimized_dir`` (None: the defaults, no optimization figures),
+    ``reoptimize_all`` (step 0: re-run the optimizer into ``OUT/optimized/`` and use those
+    optima). ValueError for a bad ``n_members``."""
 
     quick: bool = False
     force: bool = False
-    mujoco: bool = True
+    mujoco: bool | None = None
     gaits: tuple = PAPER_GAITS
-    n_members: int = MEMBERS
+    n_members: int | None = None
     params: dict | None = None
     optimized_dir: str | None = OPTIMIZED_DIR
     reoptimize_all: bool = False
 
     def __post_init__(self):
+        if self.mujoco is None:
+            object.__setattr__(self, "mujoco", not self.quick)
+        if self.n_members is None:
+            object.__setattr__(self, "n_members", QUICK_MEMBERS if self.quick else MEMBERS)
         n = self.n_members
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
             raise ValueError(f"members per gait must be a whole number >= 1, got {n!r}")
@@ -222,10 +240,13 @@ def regenerate(out_dir: str = "figures", options: FiguresOptions = FiguresOption
                           f"defaults (assumption A10) for any other gait")
         else:
             say(progress, "default gait parameters (assumption A10) for every gait")
-    specs = ensemble_specs(options.gaits, options.n_members, options.quick, params=params)
-    every = [spec for runs in specs.values() for spec in runs]
-    say(progress, f"simulating {len(specs)} gaits x {options.n_members} member(s): member 0 {every[0].duration:g} s, "
-                  f"the others {window(options.quick):g} s (cache: {cache_dir})")
+    specs = ensemble_specs(options.gaits, options.n_members, options.quick, QUICK_DT if options.quick else DEFAULT_DT,
+                           params)
+    # sidewinding first among runs of one duration: its box-free placement run makes it the longest
+    every = sorted((spec for runs in specs.values() for spec in runs), key=lambda s: s.gait != "sidewinding")
+    note = smoke_note(options)
+    say(progress, (f"{note}\n" if note else "") + f"simulating {len(specs)} gaits x {options.n_members} member(s): "
+                  f"member 0 {every[0].duration:g} s, the others {window(options.quick):g} s (cache: {cache_dir})")
     runs = run_all(every, cache_dir, force=options.force, workers=workers, progress=progress, executor=executor)
     job = FiguresJob(options, out_dir, cache_dir, optimized_dir, progress, specs, runs, files_opt, params, start)
     # the MuJoCo comparison and the optima's replays run on the executor (default: a process pool)
@@ -239,30 +260,52 @@ def _finish(job: FiguresJob, side) -> dict:
     replays go to ``side`` first, then the figures and the claims are made here."""
     from . import claims as claims_mod
 
-    opts = job.options
+    from .figures.common import smoke_run
+
+    opts, note = job.options, smoke_note(job.options)
     # the replays first: their figure is drawn before the MuJoCo figure
     replays = replays_submit(side, job.optimized_dir, opts.gaits, job.cache_dir) if job.optimized_dir else []
     pending = mujoco_submit(side, job.specs, job.runs, job.window, job.cache_dir, opts.force,
                             job.progress) if opts.mujoco else None
     results = {g: job.runs[members[0]] for g, members in job.specs.items()}
     ensemble = ensemble_summaries(job.specs, job.runs, job.window, goal_directions(job.files_opt))
-    files = _paper_figures(job, results, ensemble)
-    if job.optimized_dir and os.path.isdir(job.optimized_dir):
-        files += optimization_figures(job.optimized_dir, opts.gaits, job.out_dir, job.cache_dir, job.progress,
-                                      replays)
-    summaries = claims_mod.gait_summaries(results)
-    report = ensemble_report(ensemble)
-    settings = _report_settings(job, results)
-    if opts.mujoco:
-        report += mujoco_rows(pending, job.out_dir, job.progress, files)
-    paths = {"claims.json": json.dumps(clean(report), indent=1),
-             "claims.md": claims_mod.to_markdown(report, summaries, settings),
-             "summary.json": json.dumps(clean({"gaits": summaries, "ensemble": ensemble, "settings": settings}),
-                                        indent=1)}
+    with smoke_run(SMOKE_TITLE if note else None):
+        files = _paper_figures(job, results, ensemble)
+        if job.optimized_dir and os.path.isdir(job.optimized_dir):
+            files += optimization_figures(job.optimized_dir, opts.gaits, job.out_dir, job.cache_dir, job.progress,
+                                          replays)
+        summaries = claims_mod.gait_summaries(results)
+        report = ensemble_report(ensemble)
+        settings = _report_settings(job, results)
+        if opts.mujoco:
+            report += mujoco_rows(pending, job.out_dir, job.progress, files)
+    claims_json = marked_json({"claims": clean(report)}, note) if note else json.dumps(clean(report), indent=1)
+    paths = {"claims.json": claims_json,
+             "claims.md": (f"**{note}**\n\n" if note else "") + claims_mod.to_markdown(report, summaries, settings),
+             "summary.json": marked_json(clean({"gaits": summaries, "ensemble": ensemble, "settings": settings}), note)}
     for fname, text in paths.items():
         write_text(os.path.join(job.out_dir, fname), text)
         files.append(os.path.join(job.out_dir, fname))
     return {"files": files, "claims": clean(report), "seconds": time.perf_counter() - job.start}
+
+
+def smoke_note(options: FiguresOptions) -> str | None:
+    """The line that marks a quick run's outputs as a smoke run (module docstring); None for a full run."""
+    if not options.quick:
+        return None
+    return (f"SMOKE RUN (cobra-ref figures --quick): {QUICK_DURATION:g} s runs at dt = {QUICK_DT * 1e3:g} ms, "
+            f"{options.n_members} member(s) per "
+            f"gait{'' if options.mujoco else ', no MuJoCo comparison'}: a check that the pipeline runs, not the "
+            f"paper's results (cobra-ref figures makes those; --check compares only them)")
+
+
+def marked_json(body: dict, note: str | None) -> str:
+    """``body`` as indented JSON; with a ``note``, ``{SMOKE_KEY: note, ...body}`` with the note on the
+    first line (a reader of the first line sees it is a smoke run)."""
+    text = json.dumps(body, indent=1)
+    if note is None:
+        return text
+    return "{" + json.dumps(SMOKE_KEY) + ": " + json.dumps(note) + (",\n" + text[2:] if body else "}")
 
 
 def _paper_figures(job: FiguresJob, results: dict, ensemble: dict) -> list[str]:

@@ -5,7 +5,8 @@ poses it at the state of the current replay time (qpos = q[k], then ``mj_forward
 simulated), draws the contact arrows and points of the run's log and the box's path into the
 viewer's ``user_scn``, and shows the time (the viewer's info panel reads ``data.time``, and a text
 overlay). Replay time runs at ``speed`` times real time (0.25 = four times slower); the space bar
-pauses; the run starts again from the beginning when it ends (``loop``), or stays on its last state.
+pauses; the run starts again from the beginning when it ends (``loop``), or the replay ends after
+showing its last state.
 The camera's point of interest follows the robot and the box (``follow``); the mouse still turns and
 zooms it.
 """
@@ -15,6 +16,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -49,8 +51,10 @@ def display_problem() -> str | None:
 
 
 def replay(traj, speed: float = 1.0, loop: bool = True, follow: bool = True,
-           force_scale: float = scene.FORCE_SCALE, launch=None, max_frames: int | None = None) -> int:
-    """Replay ``traj`` in the viewer until its window is closed; return the number of frames shown.
+           force_scale: float = scene.FORCE_SCALE, launch=None, max_frames: int | None = None) -> dict:
+    """Replay ``traj`` in the viewer until its window is closed (or, with ``loop`` False, until the
+    run's last state has been shown); return ``{"frames_shown": n, "last_time_shown": t}``, t [s]
+    from the run's start.
 
     ``cobra-ref view``. ``launch`` defaults to ``mujoco.viewer.launch_passive`` (tests pass their
     own); ``max_frames`` ends the loop early (tests).
@@ -73,20 +77,22 @@ def replay(traj, speed: float = 1.0, loop: bool = True, follow: bool = True,
         if key == SPACE:
             paused["on"] = not paused["on"]
 
+    before = set(threading.enumerate())
     handle = launch(m, d, key_callback=on_key)
+    viewer_threads = [t for t in threading.enumerate() if t not in before]
     with handle.lock():
         handle.cam.type = mujoco.mjtCamera.mjCAMERA_FREE
         handle.cam.lookat[:] = lookat[0]
-        handle.cam.distance = camera["distance"]
-        handle.cam.azimuth = camera["azimuth"]
+        handle.cam.distance, handle.cam.azimuth = camera["distance"], camera["azimuth"]
         handle.cam.elevation = camera["elevation"]
-    replay_time, last, frames = 0.0, time.perf_counter(), 0
+    replay_time, last, frames, shown = 0.0, time.perf_counter(), 0, 0.0
     while handle.is_running() and (max_frames is None or frames < max_frames):
         now = time.perf_counter()
         if not paused["on"]:
             replay_time += (now - last) * speed
         last = now
-        if replay_time > traj.duration:
+        ended = replay_time > traj.duration
+        if ended:
             replay_time = 0.0 if loop else traj.duration
         k = int(scene.state_indices(traj, [traj.t[0] + replay_time])[0])
         with handle.lock():
@@ -95,11 +101,38 @@ def replay(traj, speed: float = 1.0, loop: bool = True, follow: bool = True,
             scene.add_markers(handle.user_scn, traj, k, force_scale)
             if follow:
                 handle.cam.lookat[:] = lookat[min(int(round(replay_time * 10.0)), len(lookat) - 1)]
-            if hasattr(handle, "set_texts"):
-                state = "paused (space)" if paused["on"] else f"speed x{speed:g} (space: pause)"
-                handle.set_texts((None, mujoco.mjtGridPos.mjGRID_BOTTOMLEFT, "replay",
-                                  f"t = {traj.t[k] - traj.t[0]:.3f} s / {traj.duration:.3f} s, {state}"))
+        shown = float(traj.t[k] - traj.t[0])
+        state = "paused (space)" if paused["on"] else f"speed x{speed:g} (space: pause)"
+        show_time(handle, shown, traj.duration, state)
         handle.sync()
         frames += 1
+        if ended and not loop:
+            break
         time.sleep(max(0.0, FRAME_PERIOD - (time.perf_counter() - now)))
-    return frames
+    close(handle, viewer_threads)
+    return {"frames_shown": frames, "last_time_shown": shown}
+
+
+def show_time(handle, shown: float, duration: float, state: str) -> None:
+    """The overlay text: the time shown of the run's duration [s] and the replay's state.
+
+    Called outside ``handle.lock()``: ``set_texts`` waits for the viewer's render thread, which
+    takes that lock, so calling it under the lock stops the replay on its first frame.
+    """
+    import mujoco
+
+    if hasattr(handle, "set_texts"):
+        handle.set_texts((None, mujoco.mjtGridPos.mjGRID_BOTTOMLEFT, "replay",
+                          f"t = {shown:.3f} s / {duration:.3f} s, {state}"))
+
+
+def close(handle, threads, timeout: float = 10.0) -> None:
+    """Close the viewer's window and wait (up to ``timeout`` [s]) for its threads to end.
+
+    ``launch_passive`` runs the window in a daemon thread; a process that exits while that thread
+    still renders dies of a segmentation fault, so the replay waits for it.
+    """
+    if hasattr(handle, "close") and handle.is_running():
+        handle.close()
+    for thread in threads:
+        thread.join(timeout)

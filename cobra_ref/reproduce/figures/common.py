@@ -17,6 +17,8 @@ Sizes follow the paper: one column is ``ONE_COLUMN`` = 3.5 in wide, two columns 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import contextvars
 import functools
 import os
 import sys
@@ -45,6 +47,19 @@ STYLE = {
     "savefig.dpi": DPI, "pdf.fonttype": 42,
 }
 NO_CONTACT = "no contact"
+# the line that marks every figure saved inside ``smoke_run`` (None: a full run)
+_SMOKE = contextvars.ContextVar("smoke_note", default=None)
+
+
+@contextlib.contextmanager
+def smoke_run(note: str | None):
+    """Within this context, ``save`` marks every figure with ``note`` (its first title line, in red)
+    and writes the PNG only: the figures of ``cobra-ref figures --quick``. ``note`` None: no change."""
+    token = _SMOKE.set(note)
+    try:
+        yield
+    finally:
+        _SMOKE.reset(token)
 
 
 def paper_style(make):
@@ -72,11 +87,16 @@ def save(fig: Figure, out_dir: str, stem: str) -> list[str]:
 
     Each file is written to a temporary file in ``out_dir`` and renamed with ``os.replace``, so a
     reader never sees a half-written figure. The PDF carries no creation date, so re-running on the
-    same data gives the same bytes.
+    same data gives the same bytes. Inside ``smoke_run``: the smoke note above the title, the PNG only.
     """
     os.makedirs(out_dir, exist_ok=True)
-    paths = []
-    for fmt, extra in (("png", {"dpi": DPI}), ("pdf", {"metadata": {"CreationDate": None}})):
+    paths, note = [], _SMOKE.get()
+    formats = (("png", {"dpi": DPI}), ("pdf", {"metadata": {"CreationDate": None}}))
+    if note:
+        title = fig._suptitle.get_text() if fig._suptitle is not None else ""
+        fig.suptitle(note + ("\n" + title if title else ""), color="tab:red")
+        formats = formats[:1]
+    for fmt, extra in formats:
         path = os.path.join(out_dir, f"{stem}.{fmt}")
         atomic_write(path, lambda f, fmt=fmt, extra=extra: fig.savefig(f, format=fmt, **extra))
         paths.append(path)
