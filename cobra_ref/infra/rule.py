@@ -41,6 +41,14 @@ def is_number(value) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, bool) and type(value).__name__ != "bool_"
 
 
+def as_list(values) -> list | None:
+    """``values`` as a list, or None where it is not a sequence (a number, None, ...)."""
+    try:
+        return list(values)
+    except TypeError:
+        return None
+
+
 def check_choice(field: str, value, choices) -> str:
     """``value`` if it is one of ``choices`` (a contact law, a servo, a stepper, a gait), else a
     ``ValidationError`` listing them."""
@@ -167,10 +175,7 @@ class PairRule:
     def check(self, values, field: str | None = None) -> tuple:
         """(x, y) from a sequence of two numbers (files and the API), each checked."""
         field = field or self.name
-        try:
-            items = list(values)
-        except TypeError:
-            items = None
+        items = as_list(values)
         if items is None or len(items) != 2:
             raise ValidationError(f"{field} = {values!r}: expected two numbers ({self.element.allowed()} each)")
         return tuple(self.element.check(v, f"{field} {label}") for v, label in zip(items, self.labels))

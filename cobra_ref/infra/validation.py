@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 
-from .rule import PairRule, Rule, ValidationError, check_choice, is_number, number_text
+from .rule import PairRule, Rule, ValidationError, as_list, check_choice, is_number, number_text
 
 __all__ = ["BYTES_PER_STEP", "DEFAULT_DT", "DT_MAX", "DT_MIN", "DT_WHY", "INERTIA_RULE", "MAX_STEPS", "MODEL_NUMBERS",
            "OPTIONAL_PARAMETERS", "PARAMETER_RULES", "RULES", "STEPS_WHY", "PairRule", "Rule", "ValidationError",
@@ -174,10 +174,7 @@ def check_inertia(field: str, value) -> tuple:
     other two (a rigid body's triangle inequality); a ``ValidationError`` otherwise."""
     if isinstance(value, (str, bytes)):
         raise ValidationError(f"{field} = {value!r}: expected three numbers (Ixx, Iyy, Izz) in kg m^2")
-    try:
-        items = list(value)
-    except TypeError:
-        items = None
+    items = as_list(value)
     if items is None or len(items) != 3:
         raise ValidationError(f"{field} = {value!r}: expected three numbers (Ixx, Iyy, Izz) in kg m^2")
     moments = [INERTIA_RULE.check(v, f"{field}[{i}]") for i, v in enumerate(items)]
