@@ -32,7 +32,7 @@ from .infra.validation import ValidationError, step_count
 
 IMPACT_SPEED = 0.01  # [m/s] a contact that starts carrying load while approaching faster is an impact (A26)
 MAX_START_PENETRATION = 0.005  # [m] a start deeper in the ground or the box is refused
-CONTACT_FORCE_WEIGHTS = 10.0  # the bound on a contact's normal force, in weights of every body (A32)
+CONTACT_FORCE_WEIGHTS = 30.0  # the bound on a contact's normal force, in weights of every body (A32)
 
 
 class LeftPhysicsWarning(UserWarning):
@@ -42,7 +42,7 @@ class LeftPhysicsWarning(UserWarning):
 
 def contact_force_bound(model: Model) -> float:
     """The largest normal force [N] a contact carries within physics: ``CONTACT_FORCE_WEIGHTS``
-    times the weight of every body of the model (A32; COBRA's 12 links and the 0.5 kg box: 638 N)."""
+    times the weight of every body of the model (A32; COBRA's 12 links and the 0.5 kg box: 1913 N)."""
     return CONTACT_FORCE_WEIGHTS * float(sum(model.mass)) * float(np.linalg.norm(model.gravity))
 
 
