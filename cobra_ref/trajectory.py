@@ -132,14 +132,13 @@ class Trajectory:
     def from_npz(cls, path: str) -> "Trajectory":
         """Read back what ``to_npz`` wrote.
 
-        The cache of the figure runs, and users' own analysis. A record written before a per-step key
-        or a contact-log key existed reads it as zeros.
+        The cache of the figure runs, and users' own analysis. A record written before one of
+        ``ADDED_KEYS`` existed reads it as zeros; any other missing key is a KeyError.
         """
         with np.load(path, allow_pickle=False) as z:
             n, m = len(z["tau"]), len(z["contact_step"])
             return cls(float(z["dt"]), z["t"], z["q"], z["qd"], z["tau"], z["box_pose"],
-                       {k: z[k] if k in z.files else np.zeros(n) for k in STEP_KEYS},
-                       {k: z[k] if k in z.files else np.zeros(m) for k in CONTACT_KEYS},
+                       {k: _read(z, k, n) for k in STEP_KEYS}, {k: _read(z, k, m) for k in CONTACT_KEYS},
                        float(z["wall_time"]), str(z["error"]), json.loads(str(z["meta"])))
 
     def to_npz(self, path: str) -> None:
@@ -153,3 +152,13 @@ class Trajectory:
                       wall_time=np.array(self.wall_time),
                       meta=np.array(json.dumps(self.meta)), error=np.array(self.error), **self.steps, **self.contacts)
         write_binary(path, lambda f: np.savez_compressed(f, **arrays), "NPZ")
+
+
+ADDED_KEYS = ("max_normal_force", "contact_gap", "contact_gap_end")  # keys a record may predate
+
+
+def _read(z, key: str, n: int) -> np.ndarray:
+    """``z[key]``, or n zeros for one of ``ADDED_KEYS`` that an older record lacks."""
+    if key not in z.files and key in ADDED_KEYS:
+        return np.zeros(n)
+    return z[key]
