@@ -47,9 +47,22 @@ kp dt^2 (1 - 2 theta) < 4 I + 2 (2 theta_d - 1) kd dt, which these thetas meet.
 The rows (assumption ids refer to ``docs/assumptions.md``), each law and servo an object that
 ``StepSettings`` resolves once from its name (``CONTACT_LAWS``, ``JOINT_SERVOS``):
 
-* contact normal, ``CompliantLaw`` (A12): k = ``model.contact_stiffness``, d =
-  ``model.contact_damping`` on the gap e = g, the spring at ``contact_theta``; a unilateral row
-  (x >= 0), so the force is max(0, -k g - d g') as in Simscape's spring-damper contact.
+* contact normal, ``CompliantLaw`` (A12): the unilateral spring-damper of Simscape's and MuJoCo's
+  contact, f = max(0, -k g - d g') while the contact penetrates (g < 0) and no force while it is
+  apart (k = ``model.contact_stiffness``, d = ``model.contact_damping``). A contact that
+  penetrates at the step's start (g <= 0) gets the spring-damper on the gap e = g, the spring at
+  ``contact_theta``. A contact that is apart at the step's start (g > 0; a candidate within the
+  search margin) may close within the step: its gap is g + t w at time t of the step, it touches at
+  t_c = -g / w and penetrates by -(g + dt w) at the step's end. Over [t_c, dt] the damper's impulse
+  is exactly -d (g + dt w), the damper's force d (-w) times the time it acts; the spring's,
+  k (g + dt w)^2 / (2 |w|), is second order in that time and waits for the next step, which starts
+  penetrating. So the row is a damper towards the rate -g / dt that just closes the gap::
+
+      x = -d (g + dt w)  while g + dt w < 0, else 0:    R = 1 / (d dt),  b = g / dt
+
+  It carries no force while the gap at the step's end stays positive (no force across a gap), and
+  as g -> 0 both rows give x = -d dt w (for dt <= d / k): the law is continuous at touch-down. As
+  dt -> 0 the step converges to the unilateral spring-damper's ODE (tests/test_contact_ode.py).
   ``RigidLaw``: eq. (2)-(6) as written, the gap closes in one step (b = g / dt; a
   penetration is removed at the rate beta g / dt, ``BAUMGARTE``), with the small compliance
   R = ``RIGID_COMPLIANCE`` G_ii of MuJoCo's impedance (A15), so that redundant contacts get one
@@ -99,12 +112,17 @@ class CompliantLaw:
     name = "compliant"
 
     def normal_rows(self, model, g: np.ndarray, G_NN: np.ndarray, dt: float):
-        """(R_N, b_N) (m,) each: the spring-damper on the gap, its spring at ``contact_theta``.
+        """(R_N, b_N) (m,) each: the spring-damper on the gap of a contact that penetrates at the
+        step's start (its spring at ``contact_theta``); the damper's impulse after touch-down,
+        x = -d (g + dt w), for a contact that starts apart.
 
         Implements: the compliant normal contact law of the module docstring (A12).
         """
         k, d = model.contact_stiffness, model.contact_damping
-        return spring_damper(k, d, dt, g, theta=contact_theta(k, d, dt))
+        R, b = spring_damper(k, d, dt, g, theta=contact_theta(k, d, dt))
+        apart = g > 0.0
+        # apart at the step's start: w + x / (d dt) + g / dt = 0, i.e. x = -d (g + dt w)
+        return np.where(apart, 1.0 / (d * dt), R), np.where(apart, g / dt, b)
 
     def tangential_compliance(self, G_TT: np.ndarray) -> np.ndarray:
         """0: the friction rows' compliance depends on the normal impulse (``stick_slip_compliance``)."""

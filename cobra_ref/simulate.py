@@ -5,13 +5,17 @@ Optimization") with a stepper named in :mod:`cobra_ref.steppers`: the reference 
 :func:`cobra_ref.step.step` (``stepper="reference"``) or its faster twin
 :class:`cobra_ref.fast.stepper.FastStepper` (``stepper="fast"``, the default; the two take the
 same steps, tests run them side by side), from the settle of the start to the last step. What is
-recorded: :mod:`cobra_ref.trajectory`.
+recorded: :mod:`cobra_ref.trajectory`. A run that leaves physics says so (A32): when prescribed
+joint motion needs torques beyond tau_max, or a contact's normal force exceeds
+``contact_force_bound(model)``, the run issues one ``LeftPhysicsWarning`` naming each, its worst
+value and its share of the steps; the trajectory's summary records both.
 """
 
 from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import asdict
 
 import numpy as np
@@ -28,6 +32,33 @@ from .infra.validation import ValidationError, step_count
 
 IMPACT_SPEED = 0.01  # [m/s] a contact that starts carrying load while approaching faster is an impact (A26)
 MAX_START_PENETRATION = 0.005  # [m] a start deeper in the ground or the box is refused
+CONTACT_FORCE_WEIGHTS = 30.0  # the bound on a contact's normal force, in weights of every body (A32)
+
+
+class LeftPhysicsWarning(UserWarning):
+    """A run whose joint torques or contact forces went beyond what the robot and its contacts can
+    carry (``simulate``'s module docstring, A32)."""
+
+
+def contact_force_bound(model: Model) -> float:
+    """The largest normal force [N] a contact carries within physics: ``CONTACT_FORCE_WEIGHTS``
+    times the weight of every body of the model (A32; COBRA's 12 links and the 0.5 kg box: 1913 N)."""
+    return CONTACT_FORCE_WEIGHTS * float(sum(model.mass)) * float(np.linalg.norm(model.gravity))
+
+
+def left_physics(traj: Trajectory) -> str:
+    """The sentence that says where ``traj`` left physics (``Trajectory.beyond_limits``); empty when
+    it did not."""
+    limits = traj.beyond_limits()
+    tau, force = limits["tau_beyond_limit"], limits["contact_force_beyond_bound"]
+    parts = []
+    if tau["share_of_steps"]:
+        parts.append(f"joint torques beyond tau_max = {tau['limit_N_m']:g} N m on {100 * tau['share_of_steps']:.3g} % "
+                     f"of the steps (worst {tau['worst_N_m']:.4g} N m)")
+    if force["share_of_steps"]:
+        parts.append(f"a contact's normal force beyond the bound {force['bound_N']:.4g} N (A32) on "
+                     f"{100 * force['share_of_steps']:.3g} % of the steps (worst {force['worst_N']:.4g} N)")
+    return ("the run left physics: " + "; ".join(parts)) if parts else ""
 
 
 def simulate(model: Model, reference, duration: float, settings: StepSettings = StepSettings(), q0=None,
@@ -86,7 +117,11 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
                 traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): {what}",
                                   meta(model, settings, stepping))
                 raise SimulationError(f"step failed at step {k}, t = {t:.4f} s: {what}", traj) from exc
-    return log.finish(time.perf_counter() - start, "", meta(model, settings, stepping))
+    traj = log.finish(time.perf_counter() - start, "", meta(model, settings, stepping))
+    message = left_physics(traj)
+    if message:
+        warnings.warn(message, LeftPhysicsWarning, stacklevel=2)
+    return traj
 
 
 # the failures a step is known to raise (named by their message alone); any other is named with its type
@@ -98,10 +133,13 @@ class _NonFinite(Exception):
 
 
 def meta(model: Model, settings: StepSettings, stepper) -> dict:
-    """What a run was made with (settings, friction, model, stepper) and the seconds spent per
-    phase of the stepper (``stepper.timing``), stored in the trajectory's ``meta``."""
+    """What a run was made with (settings, friction, model, stepper), its limits (the largest
+    tau_max, the contact force bound) and the seconds spent per phase of the stepper
+    (``stepper.timing``), stored in the trajectory's ``meta``."""
+    tau_max = max((float(x) for x in model.tau_limit if math.isfinite(x)), default=None)
     return {"settings": asdict(settings), "model": model.name, "nq": model.nq, "nv": model.nv,
             "mu": model.mu, "mu_robot_box": model.mu_rb, "mu_box_ground": model.mu_bg,
+            "limits": {"tau_max_N_m": tau_max, "contact_force_bound_N": contact_force_bound(model)},
             "stepper": stepper.name, "phase_seconds": dict(stepper.timing)}
 
 
@@ -147,6 +185,7 @@ class _Log:
             s[key][k] = res.residuals[key]
         s["max_penetration"][k] = max(0.0, -float(cs.g.min())) if cs.m else 0.0
         s["n_contacts"][k] = cs.m
+        s["max_normal_force"][k] = float(res.p[0::3].max()) / self.dt if cs.m else 0.0
         if len(joints.v):
             q_joint = res.q[joints.q]
             s["tau_excess"][k] = float((np.abs(res.tau) - joints.tau_max).max())
@@ -181,6 +220,8 @@ class _Log:
             p3 = res.p.reshape(-1, 3)[active]
             rows["contact_force"].append((frame @ p3[:, :, None])[:, :, 0] / self.dt)
             rows["contact_onset_speed"].append(speed)
+            rows["contact_gap"].append(cs.g[active])
+            rows["contact_gap_end"].append(cs.g[active] + self.dt * res.w[0::3][active])
         self.n = k + 1
 
     def finish(self, wall_time: float, error: str = "", meta: dict | None = None) -> Trajectory:

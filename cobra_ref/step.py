@@ -291,11 +291,11 @@ def midpoint_velocity(qd: np.ndarray, previous: dict | None) -> np.ndarray:
     last step's change of velocity (qd itself on a first step).
 
     Implements: where the velocity-product terms C(q, qd) qd of eq. (1) (Coriolis, centripetal,
-    gyroscopic) are evaluated. At qd (explicit Euler in these terms) their energy error is
-    first order in dt; at w it is second order on smooth motion, as
-    ``tests/test_stepper_physics.py`` measures on a tumbling body, and the energy ledger closes
-    within 1 % at dt = 2 ms (``cobra-ref sweep``). w is linear in the velocities, so mirrored
-    runs stay mirrored; gravity does not depend on the velocity.
+    gyroscopic) are evaluated. For one tumbling rigid body their energy error is then second order
+    in dt (at qd it is first order; ``tests/test_stepper_physics.py``). For the jointed chain the
+    step stays first order, since M(q) is taken at the step's start (docs/results.md, "The chain in
+    free flight"). w is linear in the velocities, so mirrored runs stay mirrored; gravity does not
+    depend on the velocity.
     """
     qd_prev = None if not previous else previous.get("qd")
     if qd_prev is None or np.shape(qd_prev) != np.shape(qd):

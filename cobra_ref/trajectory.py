@@ -8,7 +8,8 @@ hold steps (from t_k to t_k+1):
 * per step (``STEP_KEYS``): the friction fixed point (``fp_converged`` 1/0, ``fp_iter`` iterates,
   ``qp_iter`` OSQP iterations, ``qp_solves`` OSQP solves, ``coulomb_residual``), the contact
   conditions (``complementarity``, ``cone_residual`` against Coulomb's circle,
-  ``max_penetration`` [m], ``n_contacts``), the limits (``tau_excess`` = max |tau| - tau_max,
+  ``max_penetration`` [m], ``n_contacts``, ``max_normal_force`` = the largest normal force of a
+  contact [N], 0 without load), the limits (``tau_excess`` = max |tau| - tau_max,
   ``q_excess``, ``qd_excess`` = max |qd| - qd_max, <= 0 within them; ``tracking_error`` =
   max |q - q_ref| at the step's end [rad]), the energy ledger (``kinetic``, ``potential``,
   ``elastic`` at the step's start, ``work_actuators``, ``work_contacts`` over the step [J]) and
@@ -19,8 +20,10 @@ hold steps (from t_k to t_k+1):
   ``contact_body`` (body A: the robot link, or the box for box-ground), ``contact_point``
   (world, the midpoint of the witness points), ``contact_normal`` (world, from B to A),
   ``contact_force`` (world, the force ON body A BY body B: frame @ p / dt; the box feels minus
-  the robot-box rows) and ``contact_onset_speed`` (the approach speed [m/s] of a contact in
-  its first loaded step, 0 afterwards).
+  the robot-box rows), ``contact_onset_speed`` (the approach speed [m/s] of a contact in
+  its first loaded step, 0 afterwards), ``contact_gap`` (the gap g at the step's start [m]) and
+  ``contact_gap_end`` (g + dt g', the gap the step's velocity leads to at its end [m]: a
+  compliant contact carries a normal force only where it is negative).
 """
 
 from __future__ import annotations
@@ -33,11 +36,11 @@ import numpy as np
 from .infra.output import write_binary
 
 STEP_KEYS = ("fp_converged", "fp_iter", "qp_iter", "qp_solves", "coulomb_residual", "complementarity",
-             "cone_residual", "max_penetration", "n_contacts", "tau_excess", "q_excess", "qd_excess",
-             "tracking_error", "kinetic", "potential", "elastic", "work_actuators", "work_contacts",
+             "cone_residual", "max_penetration", "n_contacts", "max_normal_force", "tau_excess", "q_excess",
+             "qd_excess", "tracking_error", "kinetic", "potential", "elastic", "work_actuators", "work_contacts",
              "impact_count", "impact_impulse", "impact_energy")
 CONTACT_KEYS = ("contact_step", "contact_kind", "contact_body", "contact_point", "contact_normal", "contact_force",
-                "contact_onset_speed")
+                "contact_onset_speed", "contact_gap", "contact_gap_end")
 
 
 @dataclass
@@ -80,7 +83,31 @@ class Trajectory:
             "real_time_factor": round(self.duration / self.wall_time, 4) if self.wall_time > 0 else None,
             "steps": int(len(self.tau)),
             "error": self.error or None,
+            **self.beyond_limits(),
         }
+
+    def beyond_limits(self) -> dict:
+        """Where the run left physics, as the share of steps and the worst value (A32).
+
+        ``tau_beyond_limit``: the steps whose joint torques exceed tau_max (``tau_excess`` > 0) and
+        the largest |tau| [N m]; with the position servo the share is 0 by construction (its
+        impulses are bounded rows, |tau| <= tau_max). ``contact_force_beyond_bound``: the steps in
+        which a contact's normal force exceeds the bound ``meta["limits"]["contact_force_bound_N"]``
+        and the largest normal force [N]; the share is None for a record without the bound.
+        """
+        s, n = self.steps, max(len(self.tau), 1)
+        limits = self.meta.get("limits", {})
+        position = self.meta.get("settings", {}).get("servo") == "position"
+        tau = {"share_of_steps": 0.0 if position else float(np.sum(s["tau_excess"] > 0.0)) / n,
+               "worst_N_m": float(np.max(np.abs(self.tau), initial=0.0)), "limit_N_m": limits.get("tau_max_N_m")}
+        if position:
+            tau["note"] = "the position servo bounds |tau| by tau_max"
+        bound = limits.get("contact_force_bound_N")
+        force = s["max_normal_force"]
+        return {"tau_beyond_limit": tau,
+                "contact_force_beyond_bound": {
+                    "share_of_steps": None if bound is None else float(np.sum(force > bound)) / n,
+                    "worst_N": float(np.max(force, initial=0.0)), "bound_N": bound}}
 
     def truncated(self, duration: float) -> "Trajectory":
         """The first ``duration`` seconds: the states up to step n = round(duration / dt), the
@@ -105,11 +132,13 @@ class Trajectory:
     def from_npz(cls, path: str) -> "Trajectory":
         """Read back what ``to_npz`` wrote.
 
-        The cache of the figure runs, and users' own analysis.
+        The cache of the figure runs, and users' own analysis. A record written before one of
+        ``ADDED_KEYS`` existed reads it as zeros; any other missing key is a KeyError.
         """
         with np.load(path, allow_pickle=False) as z:
+            n, m = len(z["tau"]), len(z["contact_step"])
             return cls(float(z["dt"]), z["t"], z["q"], z["qd"], z["tau"], z["box_pose"],
-                       {k: z[k] for k in STEP_KEYS}, {k: z[k] for k in CONTACT_KEYS},
+                       {k: _read(z, k, n) for k in STEP_KEYS}, {k: _read(z, k, m) for k in CONTACT_KEYS},
                        float(z["wall_time"]), str(z["error"]), json.loads(str(z["meta"])))
 
     def to_npz(self, path: str) -> None:
@@ -123,3 +152,13 @@ class Trajectory:
                       wall_time=np.array(self.wall_time),
                       meta=np.array(json.dumps(self.meta)), error=np.array(self.error), **self.steps, **self.contacts)
         write_binary(path, lambda f: np.savez_compressed(f, **arrays), "NPZ")
+
+
+ADDED_KEYS = ("max_normal_force", "contact_gap", "contact_gap_end")  # keys a record may predate
+
+
+def _read(z, key: str, n: int) -> np.ndarray:
+    """``z[key]``, or n zeros for one of ``ADDED_KEYS`` that an older record lacks."""
+    if key not in z.files and key in ADDED_KEYS:
+        return np.zeros(n)
+    return z[key]

@@ -40,7 +40,8 @@ def test_python_dash_m_help_lists_the_subcommands():
 # ------------------------------------------------------------------------------ simulate
 
 SUMMARY_KEYS = {"box_displacement", "max_penetration", "max_cone_residual", "max_coulomb_residual",
-                "fixed_point_converged", "max_abs_tau", "impacts_per_second", "real_time_factor"}
+                "fixed_point_converged", "max_abs_tau", "impacts_per_second", "real_time_factor",
+                "tau_beyond_limit", "contact_force_beyond_bound"}
 
 
 def test_simulate_writes_the_npz_and_prints_one_json_line(tmp_path, capfd):

@@ -21,14 +21,15 @@ def step_map(model, mass: float, dt: float) -> np.ndarray:
     """The 2 x 2 matrix A with (g+, w+) = A (g, w) of one engaged contact of mass ``mass`` without gravity.
 
     The contact row's optimality condition w+ + R x + b = 0 with w+ = w + x / mass (G = 1 / mass),
-    then g+ = g + dt w+; (R, b) from the compliant law's ``normal_rows``, which is linear in g (b = 0 at g = 0).
+    then g+ = g + dt w+; (R, b) from the compliant law's ``normal_rows`` of a penetrating contact (g <= 0),
+    which is linear in g (b = 0 at g = 0): the columns are probed at g = -1 (and negated) and w = 1.
     """
     A = np.zeros((2, 2))
-    for j, (g, w) in enumerate([(1.0, 0.0), (0.0, 1.0)]):
+    for j, (g, w, sign) in enumerate([(-1.0, 0.0, -1.0), (0.0, 1.0, 1.0)]):
         R, b = np.broadcast_arrays(*CONTACT_LAWS["compliant"].normal_rows(model, np.array([g]), np.array([1.0 / mass]), dt))
         x = -(w + b[0]) / (1.0 / mass + R[0])
         w_next = w + x / mass
-        A[:, j] = g + dt * w_next, w_next
+        A[:, j] = sign * (g + dt * w_next), sign * w_next
     return A
 
 

@@ -29,17 +29,18 @@ def test_the_draw_is_reproducible_and_within_the_stated_ranges():
 
 def _record(index, **measures):
     base = {"steps": 100, "converged": 1.0, "cone_residual": 0.0, "coulomb_residual": 0.0, "complementarity": 0.0,
-            "max_penetration": 1e-5, "ledger_residual": 1e-4, "max_box_tilt_deg": 0.0, "us_per_step": 1.0}
+            "max_penetration": 1e-5, "penetration_error": 1e-5, "ledger_residual": 1e-4, "max_box_tilt_deg": 0.0,
+            "worst_tau_N_m": 5.0, "worst_normal_force_N": 30.0, "us_per_step": 1.0, "left_physics": []}
     return {"scenario": {"index": index}, "error": None, **base, **measures}
 
 
 def test_the_summary_names_every_scenario_that_fails_a_check():
     records = [_record(0), _record(1, converged=0.99), _record(2, cone_residual=2e-3),
-               _record(3, max_penetration=2e-3, ledger_residual=0.5),
+               _record(3, penetration_error=2e-3, ledger_residual=0.5),
                {"scenario": {"index": 4}, "error": "step failed", "seconds": 1.0}]
     summary = sw.summarize(records)
     failing = {k: v["failing"] for k, v in summary["checks"].items()}
-    assert failing == {"converged": [1], "cone_residual": [2], "max_penetration": [3], "ledger_residual": [3]}
+    assert failing == {"converged": [1], "cone_residual": [2], "penetration_error": [3], "ledger_residual": [3]}
     assert summary["errors"] == [4] and summary["completed"] == 4
     assert summary["measures"]["converged"]["worst"] == 0.99
     # the share of converged steps weighs each scenario by its steps
@@ -47,6 +48,27 @@ def test_the_summary_names_every_scenario_that_fails_a_check():
     assert "fails in scenarios [1]" in sw.format_summary(summary)
     clean = sw.summarize([_record(0), _record(1)])
     assert not any(c["failing"] for c in clean["checks"].values())
+
+
+def test_scenarios_that_left_physics_are_reported_apart():
+    # scenario 1 squeezes the box (a kN force, 14 mm deep, most of it the spring's deflection F / k);
+    # scenario 2 needs 100 tau_max and its solve fails a check: listed apart, not in "failing"
+    records = [_record(0), _record(1, max_penetration=0.014, penetration_error=2e-4, worst_normal_force_N=1.4e4,
+                                      left_physics=["contact_force"]),
+               _record(2, worst_tau_N_m=920.0, penetration_error=5e-3, left_physics=["tau", "contact_force"]),
+               _record(3, max_penetration=2e-3)]
+    summary = sw.summarize(records)
+    assert summary["physical"] == 2 and summary["left_physics"] == [1, 2]
+    # the statistics of the physical scenarios hold none of the others' values
+    assert summary["measures"]["max_penetration"]["worst"] == 2e-3
+    assert summary["measures"]["worst_normal_force_N"]["worst"] == 30.0
+    assert summary["measures_left_physics"]["worst_tau_N_m"]["worst"] == 920.0
+    # the 1 mm line judges the solver's error, not the raw penetration
+    check = summary["checks"]["penetration_error"]
+    assert check["failing"] == [] and check["failing_left_physics"] == [2]
+    text = sw.format_summary(summary)
+    assert "2 physical, 2 left physics (A32) [1, 2]" in text and "scenarios that left physics:" in text
+    assert "of those that left physics, fails in [2]" in text
 
 
 def test_one_scenario_runs_and_meets_the_checks():
@@ -60,6 +82,8 @@ def test_one_scenario_runs_and_meets_the_checks():
             assert record[key] >= limit if kind == "min" else record[key] <= limit, key
     assert record["contact_dissipation"] > 0
     assert np.isfinite(record["us_per_step"]) and record["us_per_step"] > 0
+    assert record["left_physics"] == [] and record["tau_beyond_share"] == 0.0
+    assert 0.0 <= record["penetration_error"] <= record["max_penetration"] + 1e-12
 
 
 def test_the_command_writes_every_record(tmp_path):

@@ -16,6 +16,7 @@ import contextlib
 import json
 import os
 import sys
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -118,15 +119,23 @@ def run_and_write(job: Job, out: str, label: str, quiet: bool = False, meta=None
     ``summary(traj)``'s keys); a failure mid-run (any exception of the step, or Ctrl-C) writes what
     was computed to OUT.failed.npz and exits with the error, which names the step and the time.
     ``meta`` is added to the trajectory's meta; ``label`` names the progress line (none if ``quiet``).
+    A run that left physics (``simulate.LeftPhysicsWarning``) prints ``warning: ...`` as one line
+    on stderr, after the run.
     """
-    from ..simulate import simulate
+    from ..simulate import LeftPhysicsWarning, simulate
     from ..step import SimulationError
 
     progress = None if quiet else progress_printer(label)
     try:
-        with c_stdout_silenced():
+        with c_stdout_silenced(), warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", LeftPhysicsWarning)
             traj = simulate(job.model, job.reference, job.duration, job.settings, job.q0, job.qd0,
                             progress=progress, stepper=job.stepper)
+        for w in caught:
+            if issubclass(w.category, LeftPhysicsWarning):
+                print(f"warning: {w.message}", file=sys.stderr)
+            else:
+                warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     except SimulationError as exc:
         if exc.trajectory is None:  # bad input: nothing was computed, nothing is written
             raise fail(exc) from None

@@ -132,8 +132,11 @@ def add_parsers(sub) -> None:
                        description="Simulate COBRA and the box on flat ground for a joint reference. Writes every "
                                    "array (t, q, qd, tau, box_pose, per-step solver records, the contact log) to "
                                    "OUT (exactly that name) and prints a one-line JSON summary (box_displacement, "
-                                   "max_penetration, max_cone_residual, real_time_factor). A run that fails "
-                                   "part-way keeps what was computed in OUT.failed.npz.")
+                                   "max_penetration, max_cone_residual, real_time_factor, tau_beyond_limit, "
+                                   "contact_force_beyond_bound). A run that left physics (joint torques beyond "
+                                   "tau_max with --servo prescribed, or a contact force beyond the bound of A32) "
+                                   "prints one warning line on stderr. A run that fails part-way keeps what was "
+                                   "computed in OUT.failed.npz.")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--gait", default="C", metavar="NAME", type=gait_name,
                      help="a gait with its default parameters: C (default), S, J, J-mirror (lateral rolling, "

@@ -12,7 +12,8 @@ from .common import c_stdout_silenced, check_out, fail, write_text_atomic
 
 
 def cmd_sweep(args) -> int:
-    """Run the sweep on the local cores, print the summary, write every record as JSON.
+    """Run the sweep on the local cores, print the summary, write every record as JSON; exit status 1
+    when a physical scenario fails a check or a scenario raises (``reproduce.sweep.summarize``).
     """
     from ..infra.executors import default_executor
     from ..reproduce.sweep import format_summary, run_scenario, scenarios, summarize
@@ -52,8 +53,11 @@ def add_parsers(sub) -> None:
     p = sub.add_parser("sweep", help="reliability of the contact solve over randomized scenarios",
                        description="Draws N scenarios from a seed (gait parameters within the optimizer's bounds, "
                                    "mu 0.3-1.5, box mass 0.1-2 kg, dt 0.5-2 ms, both servos), simulates each and "
-                                   "checks the friction fixed point's convergence, Coulomb's circle, penetration and "
-                                   "the energy ledger. Exit status 1 when a scenario fails a check.")
+                                   "checks the friction fixed point's convergence, Coulomb's circle, the solver's "
+                                   "penetration error (penetration minus the compliant spring's deflection F/k) and "
+                                   "the energy ledger. Scenarios that left physics (prescribed joints needing torques "
+                                   "beyond tau_max, or a contact force beyond the bound of A32) are reported apart. "
+                                   "Exit status 1 when a physical scenario fails a check or a scenario fails.")
     p.add_argument("--n", type=RULES["count"].arg("--n"), default=100, help="number of scenarios (default 100)")
     p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=0, help="random seed (default 0)")
     p.add_argument("--duration", type=RULES["scenario_duration"].arg("--duration"), default=2.0,

@@ -423,3 +423,19 @@ def ledger_residual(traj) -> float:
     W_act, W_contact = float(s["work_actuators"][:-1].sum()), float(s["work_contacts"][:-1].sum())
     E = s["kinetic"] + s["potential"]
     return abs(W_act + W_contact - float(E[-1] - E[0])) / max(abs(W_act), 1e-9)
+
+
+GAP_TOL = 1e-7  # [m] a gap at a step's end below this is closed (the solver's tolerance on a gap)
+
+
+def force_across_gap(traj) -> float:
+    """The largest normal force [N] a contact carries in a step whose gap stays positive through it
+    (g > 0 at the start and g + dt g' > GAP_TOL at the end): 0 for the compliant law (A12), which
+    has no force across a gap. Read from the contact log (``contact_gap``, ``contact_gap_end``);
+    NaN for a run recorded without them."""
+    c = traj.contacts
+    if "contact_gap_end" not in c or "contact_gap" not in c:
+        return float("nan")
+    apart = (c["contact_gap"] > 0.0) & (c["contact_gap_end"] > GAP_TOL)
+    f_N = np.einsum("ij,ij->i", c["contact_force"], c["contact_normal"])
+    return float(np.max(f_N[apart], initial=0.0))

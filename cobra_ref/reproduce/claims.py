@@ -341,6 +341,7 @@ def gait_summaries(results: dict) -> dict:
         out[g]["error"] = traj.error
         out[g]["max_penetration"] = float(np.max(traj.steps["max_penetration"], initial=0.0))
         out[g]["max_cone_residual"] = float(np.max(traj.steps["cone_residual"], initial=0.0))
+        out[g]["max_force_across_gap"] = analysis.force_across_gap(traj)
         out[g]["steps_over_torque_limit"] = float(np.mean(traj.steps["tau_excess"] > 0)) if len(traj.tau) else 0.0
         out[g].update(analysis.tracking_errors(traj))
         out[g]["ledger_residual"] = analysis.ledger_residual(traj)

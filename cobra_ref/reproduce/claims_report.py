@@ -45,7 +45,8 @@ TABLE = (("duration", "T (s)", 1.0), ("locomotion_work", "W_loc (J)", 1.0), ("bo
          ("fixed_point_converged", "fixed point converged (%)", 100.0),
          ("steps_over_torque_limit", "steps over tau_max (%)", 100.0),
          ("max_tracking_error", "largest joint error (rad)", 1.0), ("rms_tracking_error", "RMS joint error (rad)", 1.0),
-         ("ledger_residual", "energy ledger residual (%)", 100.0), ("max_penetration", "max penetration (m)", 1.0))
+         ("ledger_residual", "energy ledger residual (%)", 100.0), ("max_penetration", "max penetration (m)", 1.0),
+         ("max_force_across_gap", "normal force across a positive gap (N)", 1.0))
 
 
 def to_markdown(claims: list[dict], summaries: dict, settings: dict) -> str:
