@@ -67,6 +67,14 @@ def test_the_readme_stays_short_with_the_equation_map_near_the_top():
     assert any(line.startswith("## Where each equation lives") for line in lines[:120])
 
 
+def test_the_readme_holds_the_two_set_up_commands_ci_runs():
+    """.ci/run runs the README's lines that start with ``python3 -m venv .venv && ``: exactly two, the
+    figures' check and the tests, each from a fresh virtual environment."""
+    commands = [line for line in readme().splitlines() if line.startswith("python3 -m venv .venv && ")]
+    assert len(commands) == 2, commands
+    assert commands[0].endswith("cobra-ref figures --check") and commands[1].endswith("python -m pytest")
+
+
 # ------------------------------------------------------------------------------------------- plot_run
 
 @pytest.fixture(scope="module")
