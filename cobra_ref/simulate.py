@@ -69,7 +69,8 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
     stepper (``steppers.STEPPERS``); a new one is made for the run, and, without q0, for the start
     ``start.initial_state(model, reference, settings, stepper=stepper)`` (the default box
     placement; for another, pass that function's (q0, qd0) with its ``BoxPlacement``). The time
-    grid is checked before anything is allocated (``validation.time_grid``): ``settings.dt`` within the stable range,
+    grid is checked before anything is allocated (``validation.step_count``; ``settings.dt`` was checked by
+    ``StepSettings``): ``settings.dt`` within the stable range,
     ``round(duration / dt)`` steps, at least one and at most ``validation.MAX_STEPS`` (the
     command line also asks for a whole number of steps). Raises ``SimulationError`` for a bad
     duration or stepper, a start in deep penetration, or a failure mid-run; a failure mid-run,

@@ -86,6 +86,12 @@ class Trajectory:
             **self.beyond_limits(),
         }
 
+    def contact_normal_force(self) -> np.ndarray:
+        """(rows,) the normal force [N] of each row of the contact log, ``contact_force`` .
+        ``contact_normal`` (on body A, along the normal from B to A)."""
+        c = self.contacts
+        return np.einsum("ij,ij->i", np.reshape(c["contact_force"], (-1, 3)), np.reshape(c["contact_normal"], (-1, 3)))
+
     def beyond_limits(self) -> dict:
         """Where the run left physics, as the share of steps and the worst value (A32).
 

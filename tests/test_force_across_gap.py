@@ -19,12 +19,17 @@ from cobra_ref.reproduce import analysis
 from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import simulate
 from cobra_ref.step import StepSettings
+from cobra_ref.trajectory import Trajectory
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TOLERANCE = 1e-3  # [N] numerically zero beside the gaits' 1-150 N contact forces
 
 
 class _Log:
+    """A contact log of one row per (gap, end gap, force), read as a Trajectory reads its log."""
+
+    contact_normal_force = Trajectory.contact_normal_force
+
     def __init__(self, gap, gap_end, force):
         n = len(gap)
         self.contacts = {"contact_gap": np.array(gap), "contact_gap_end": np.array(gap_end),

@@ -18,6 +18,7 @@ from ..planning.cost import shooting_cost
 from ..planning.problem import ShootingError
 from ..planning.results import ParamsRun, params_reference
 from ..robots import cobra_model
+from ..steppers import STEPPERS
 from ..infra.validation import DEFAULT_DT, RULES, ValidationError, step_count
 from .common import (Job, add_model_options, c_stdout_silenced, check_out, fail, gait_param, model_parameters,
                      run_and_write)
@@ -159,7 +160,7 @@ def add_parsers(sub) -> None:
     p.add_argument("--servo", choices=("position", "prescribed"), default="position",
                    help="joints: position (default, the paper's position control within tau_max) or prescribed "
                         "(the joints follow the reference exactly, torques recovered)")
-    p.add_argument("--stepper", choices=("fast", "reference"), default="fast",
+    p.add_argument("--stepper", choices=STEPPERS, default="fast",
                    help="fast (default) or reference (the readable step, slow; the same physics)")
     add_model_options(p)
     p.add_argument("--box-offset", type=RULES["box_offset_pair"].arg("--box-offset"), default=None, metavar="DX,DY",

@@ -48,7 +48,7 @@ class FastStepper:
     name = "fast"
 
     def __init__(self, model: Model, settings: StepSettings = StepSettings()):
-        self.model, self.s = model, settings
+        self.model, self.settings = model, settings
         self.chain = ChainModel(model)
         self.joints = joint_coordinates(model)
         servo = settings.joint_servo
@@ -62,10 +62,6 @@ class FastStepper:
         self.memory = None
         self.reference_end = None  # (reference, t + dt, (q_ref, qd_ref)) of the last step
         self.timing = dict.fromkeys(PHASES, 0.0)
-
-    @property
-    def settings(self) -> StepSettings:
-        return self.s
 
     def reset(self) -> None:
         """Forget the warm start and the timing: between runs on one stepper."""
@@ -82,7 +78,8 @@ class FastStepper:
 
     def step(self, q: np.ndarray, qd: np.ndarray, t: float, reference, tau_ext=None) -> StepResult:
         """One step from (q, qd) at time t: :func:`cobra_ref.step.step`, faster (module docstring)."""
-        s, model, dt, F, P, servo = self.s, self.model, self.s.dt, self.free, self.prescribed, self.s.joint_servo
+        s, model, F, P = self.settings, self.model, self.free, self.prescribed
+        dt, servo = s.dt, s.joint_servo
         clock = [time.perf_counter()]
         tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
         # Steps 1-3: eq. (1) with h at the midpoint velocity, the joints, qd_free over the free coordinates
@@ -132,7 +129,7 @@ class FastStepper:
 
     def _integrate(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """q (+) dt qd: :func:`cobra_ref.kinematics.integrate` with the revolute joints in one vector operation."""
-        dt, chain = self.s.dt, self.chain
+        dt, chain = self.settings.dt, self.chain
         q_next = q.copy()
         q_next[chain.rev_q] += dt * qd[chain.rev_v]
         for _, iq, iv in chain.free:

@@ -437,5 +437,4 @@ def force_across_gap(traj) -> float:
     if "contact_gap_end" not in c or "contact_gap" not in c:
         return float("nan")
     apart = (c["contact_gap"] > 0.0) & (c["contact_gap_end"] > GAP_TOL)
-    f_N = np.einsum("ij,ij->i", c["contact_force"], c["contact_normal"])
-    return float(np.max(f_N[apart], initial=0.0))
+    return float(np.max(traj.contact_normal_force()[apart], initial=0.0))

@@ -112,9 +112,7 @@ def penetration_error(traj, stiffness: float) -> float:
     k = ``stiffness`` [N/m]), at least 0; with the rigid law, the largest penetration."""
     if traj.meta.get("settings", {}).get("contact") != "compliant":
         return float(np.max(traj.steps["max_penetration"], initial=0.0))
-    c = traj.contacts
-    f_n = np.einsum("ij,ij->i", c["contact_force"], c["contact_normal"])
-    return float(np.max(-c["contact_gap"] - f_n / stiffness, initial=0.0))
+    return float(np.max(-traj.contacts["contact_gap"] - traj.contact_normal_force() / stiffness, initial=0.0))
 
 
 def physics_measures(traj) -> dict:

@@ -15,10 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..contact import KINDS as KIND_NAMES  # contact_kind 0, 1, 2
 from ..trajectory import Trajectory
 
 PANELS = ("box", "forces", "torques")
-KIND_NAMES = ("robot-ground", "robot-box", "box-ground")  # contact_kind 0, 1, 2 (cobra_ref.trajectory)
 
 
 def as_trajectory(run) -> Trajectory:
@@ -32,8 +32,7 @@ def normal_forces(traj: Trajectory) -> dict:
     n_steps = len(traj.tau)
     c = traj.contacts
     steps = np.asarray(c["contact_step"], dtype=int)
-    f_n = np.einsum("ij,ij->i", np.asarray(c["contact_force"]).reshape(-1, 3),
-                    np.asarray(c["contact_normal"]).reshape(-1, 3)) if len(steps) else np.zeros(0)
+    f_n = traj.contact_normal_force()
     kinds = np.asarray(c["contact_kind"], dtype=int)
     return {name: np.bincount(steps[kinds == k], weights=f_n[kinds == k], minlength=n_steps)[:n_steps]
             for k, name in enumerate(KIND_NAMES)}
