@@ -7,7 +7,8 @@ import json
 import os
 import sys
 
-from .common import c_stdout_silenced
+from .common import c_stdout_silenced, fail
+from ..infra.output import OutputError
 from ..infra.validation import RULES
 
 FULL_OUT, QUICK_OUT = "figures", "figures-quick"  # the default output directories
@@ -38,7 +39,12 @@ def cmd_figures(args) -> int:
         options = FiguresOptions(quick=args.quick, force=args.force, mujoco=mujoco, gaits=gaits,
                                  n_members=args.members, optimized_dir=None if args.defaults else OPTIMIZED_DIR,
                                  reoptimize_all=args.reoptimize)
-        result = regenerate(out, options, cache_dir=args.cache, workers=args.jobs, progress=not args.quiet)
+        try:
+            result = regenerate(out, options, cache_dir=args.cache, workers=args.jobs, progress=not args.quiet)
+        except OutputError as exc:  # a write that failed late (a full disk): the runs stored so far are kept
+            cache = args.cache or os.path.join(out, ".cache")
+            raise fail(f"{exc}; the runs finished before are kept in the cache {cache} (the next run reads "
+                       "them)") from None
     summary = {"smoke run": True} if args.quick else {}
     summary |= {"out": out, "files": len(result["files"]),
                 "claims": {c["id"]: c.get("verdict", c["holds"]) for c in result["claims"]},

@@ -44,6 +44,7 @@ from dataclasses import asdict, dataclass, field, replace
 from ..provenance import __version__, physics_hash
 from ..gaits import gait, gait_params
 from ..infra.executors import worker_init
+from ..infra.output import write_error
 from ..params import CobraParameters
 from ..placement import TravelPlacement, travel_placement
 from ..infra.progress import progress_printer
@@ -177,10 +178,16 @@ def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Traject
 
 def store(spec: RunSpec, cache_dir: str, traj: Trajectory, failed: bool) -> str:
     """Write ``traj`` to the cache (``<name>.npz``, or ``<name>.failed.npz`` for a failed run); return the path.
+
+    An ``OutputError`` names the file and the reason when it cannot be written (a full disk); the
+    entries stored before are kept.
     """
     path = os.path.join(cache_dir, spec.filename())
     out = path[:-4] + ".failed.npz" if failed else path
-    os.makedirs(cache_dir, exist_ok=True)
+    try:
+        os.makedirs(cache_dir, exist_ok=True)
+    except OSError as exc:
+        raise write_error(out, "cache entry", exc) from None
     traj.to_npz(out)
     return out
 
