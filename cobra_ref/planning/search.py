@@ -42,6 +42,7 @@ class ShootingResult:
     wall_time: float
     transfer: dict | None = None  # results.transfer of the optimum, when checked (optimize_gait)
     without_impact: dict | None = None  # the rollout of least J - w_I I (optimize's companion search)
+    checkpoint: bool = False  # the rollouts so far of a search still running (optimize's ``checkpoint``)
 
     @property
     def params(self) -> dict:
@@ -66,6 +67,7 @@ class _Evaluations:
         self.width = max(int(width), 1)  # rollouts that run at once
         self.rollout_seconds = None  # the wall time of one rollout, measured on the first batch
         self.after_first = None  # a callable(rollout_seconds) -> line, said after the first batch
+        self.after_batch = None  # a callable() called once each batch is in the history
 
     def best(self, cost=lambda e: e["cost"]) -> dict | None:
         """The history entry of least ``cost`` (default J; the first of equals)."""
@@ -112,6 +114,8 @@ class _Evaluations:
         if self.progress:
             self.progress(self._line(entries))
         self.iteration += 1
+        if self.after_batch is not None:
+            self.after_batch()
 
     def _line(self, entries) -> str:
         it, b, best = self.iteration, min(entries, key=lambda e: e["cost"]), self.best()
@@ -196,7 +200,7 @@ class SearchOptions:
 
 
 def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), executor: Executor | None = None,
-             progress=None, workers: int | None = None) -> ShootingResult:
+             progress=None, workers: int | None = None, checkpoint=None) -> ShootingResult:
     """Minimise J(p) over the bounds from ``problem.x0``; every rollout goes through ``executor``.
 
     Implements: the single-shooting optimizer (derivative-free, bounded, deterministic).
@@ -229,6 +233,8 @@ def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), 
     ``executor``: any ``concurrent.futures.Executor`` whose workers can import cobra_ref; default
     ``default_executor(workers)``, a process pool on the local cores, shut down at the end.
     ``progress``: a callable taking one line of text per iteration (the CLI prints it on stderr).
+    ``checkpoint``: a callable taking a ``ShootingResult`` of every rollout so far (``checkpoint``
+    true), called after each batch: the CLI writes it to the params JSON as the search goes.
     Ctrl-C (KeyboardInterrupt) stops the search and returns the best rollout found so far with
     ``interrupted=True``. The result is the same for any executor (the rollouts are deterministic
     and each batch is collected in order).
@@ -239,6 +245,10 @@ def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), 
     interrupted, message = False, ""
     run = _compass_search if search.method == "pattern" else _differential_evolution
     companion = search.companion and problem.weights.impact > 0
+    iterations = 0
+    if checkpoint is not None:
+        evals.after_batch = lambda: checkpoint(_result(problem, search, evals, iterations, False, (
+            f"checkpoint after {len(evals.history)} rollouts: the search was still running"), checkpoint=True))
     try:
         _announce(problem, search, evals, 2 if companion else 1)
         message = run(problem, evals, search)
@@ -254,13 +264,22 @@ def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), 
             shutdown(executor, interrupted)
     if not evals.history:
         raise ShootingError("interrupted before any rollout finished: nothing to keep")
+    return _result(problem, search, evals, iterations, interrupted, message)
+
+
+def _result(problem: ShootingProblem, search: SearchOptions, evals: _Evaluations, iterations: int,
+            interrupted: bool, message: str, checkpoint: bool = False) -> ShootingResult:
+    """The ``ShootingResult`` of the rollouts in ``evals`` (``checkpoint``: of a search still
+    running). ``iterations``: those of the search of J once it has ended (while it runs, its own
+    count)."""
     iterations = evals.iteration if evals.search == "J" else iterations
     unpenalized = evals.best(lambda e: cost_without_impact(problem, e)) if evals.search != "J" else None
     options = {"step": search.step, "min_step": search.min_step, "popsize": search.popsize,
                "companion": evals.search != "J"}
-    return ShootingResult(problem, search.method, search.seed, int(search.maxiter), options, evals.history,
+    return ShootingResult(problem, search.method, search.seed, int(search.maxiter), options, list(evals.history),
                           evals.best(), max(iterations - 1, 0), interrupted, message,
-                          time.perf_counter() - evals.start, without_impact=unpenalized)
+                          time.perf_counter() - evals.start, without_impact=unpenalized,
+                          checkpoint=checkpoint)
 
 
 def _width(executor: Executor, workers: int | None) -> int:
