@@ -153,8 +153,8 @@ def run_and_write(job: Job, out: str, label: str, quiet: bool = False, meta=None
     traj.meta.update(meta or {})
     try:
         traj.to_npz(out)
-    except OSError as exc:  # the target changed during the run (checked before it)
-        raise fail(f"{exc}\n{_keep_partial(traj, out)}") from None
+    except OSError as exc:  # a full disk, or the target changed during the run (checked before it)
+        raise fail(f"{exc}; {_keep_partial(traj, out)}") from None
     print(json.dumps({**traj.summary(), **(summary(traj) if summary else {})}))
     return traj
 
