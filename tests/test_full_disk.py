@@ -292,3 +292,22 @@ def test_optimize_with_room_ends_with_the_result_and_no_checkpoint_mark(tmp_path
     record = json.loads(target.read_text())
     assert code == 0 and line is None and "warning" not in err
     assert "checkpoint" not in record and len(record["history"]) == 8
+
+
+def test_the_optimizations_of_figures_reoptimize_keep_their_rollouts_the_same_way(tmp_path, full_disk, monkeypatch):
+    from cobra_ref.planning import SerialExecutor, optimize_gait
+    from cobra_ref.step import StepSettings
+
+    monkeypatch.setattr(search, "evaluate", made_up_rollout)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    target, lines = tmp_path / "optimized" / "C.json", []
+    full_disk(target.parent, writes_left=1)
+    with pytest.raises(OutputError) as info:
+        optimize_gait("C", goal=(0.03, 0.0), out=str(target), executor=SerialExecutor(), progress=lines.append,
+                      check_dt=None, search=search.SearchOptions(maxiter=2, companion=False), duration=0.1,
+                      settings=StepSettings(dt=0.002))
+    (fallback,) = tmp_path.glob("cobra-ref-C-*.json")
+    assert str(info.value).endswith(f"; the result (8 rollouts) is kept in {fallback}")
+    assert json.loads(target.read_text())["checkpoint"] is True
+    assert len(json.loads(fallback.read_text())["history"]) == 8
+    assert sum(line.startswith("warning: checkpoint not written") for line in lines) == 1

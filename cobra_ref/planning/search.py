@@ -19,7 +19,8 @@ from ..infra.executors import default_executor, shutdown
 from ..gaits import gait_params
 from .cost import cost_without_impact, evaluate
 from .problem import DEFAULT_MAXITER, DEFAULTS, ShootingError, ShootingProblem, make_problem
-from .results import CHECK_DT, transfer, write_result
+from .checkpoint import Checkpoint
+from .results import CHECK_DT, transfer
 
 
 @dataclass
@@ -367,8 +368,10 @@ def optimize_gait(name: str, goal=None, out: str | None = None, executor: Execut
                   **problem_options) -> ShootingResult:
     """Optimize one gait at its defaults (``DEFAULTS[name]``: goal, horizon and maxiter, unless
     given), check the optimum at ``check_dt`` (``results.transfer``; None = no check) and write the
-    params JSON to ``out`` (default ``optimized/<name>.json``; "" = do not write): what
-    ``cobra-ref figures --reoptimize`` runs per gait.
+    params JSON to ``out`` (default ``optimized/<name>.json``; "" = do not write), after every
+    batch of rollouts too (``checkpoint.Checkpoint``): what ``cobra-ref figures --reoptimize`` runs
+    per gait. An ``OutputError`` names the file and where the result is kept when ``out`` cannot
+    be written at the end.
 
     ``progress`` defaults to lines on stderr; ``search``: ``SearchOptions`` (default: the gait's
     maxiter); ``problem_options`` go to ``make_problem`` (duration, settings, space, weights, cobra,
@@ -379,7 +382,12 @@ def optimize_gait(name: str, goal=None, out: str | None = None, executor: Execut
     problem = make_problem(name, d_goal if goal is None else goal, **problem_options)
     if progress is None:
         progress = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
-    result = optimize(problem, SearchOptions(maxiter=d_maxiter) if search is None else search, executor, progress)
+    out = os.path.join("optimized", f"{name}.json") if out is None else out
+    if out:
+        os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+    keeper = Checkpoint(out, progress) if out else None
+    result = optimize(problem, SearchOptions(maxiter=d_maxiter) if search is None else search, executor, progress,
+                      checkpoint=keeper)
     if check_dt is not None and result.best["terms"] is not None:
         x = [result.best["params"][n] for n in problem.names]
         result.transfer = transfer(problem, x, result.best, check_dt)
@@ -388,8 +396,6 @@ def optimize_gait(name: str, goal=None, out: str | None = None, executor: Execut
                  + ("failed: " + t["check_error"] if t["check_error"] else
                     f"{t['check_distance_to_goal']:.4f} m (check); impact impulse "
                     f"{t['plan_impact_impulse_per_s']:.4g} -> {t['check_impact_impulse_per_s']:.4g} N s/s"))
-    out = os.path.join("optimized", f"{name}.json") if out is None else out
-    if out:
-        os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
-        write_result(result, out)
+    if keeper is not None:
+        keeper.final(result)
     return result
