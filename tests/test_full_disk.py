@@ -126,8 +126,9 @@ def test_each_writer_on_a_full_disk_names_the_file_and_keeps_the_previous_one(na
     full_disk(tmp_path)
     with pytest.raises(OutputError) as info:
         write(str(target))
-    message = str(info.value)
-    assert message == f"cannot write {message.split(' ')[2]} {str(target)!r}: {NO_SPACE}; its previous content is unchanged"
+    message = str(info.value)  # "cannot write <what> '<target>': No space left on device; ..."
+    assert message.startswith("cannot write ")
+    assert message.endswith(f" {str(target)!r}: {NO_SPACE}; its previous content is unchanged")
     assert target.read_text() == PREVIOUS
     assert leftovers(tmp_path) == []
 
@@ -311,3 +312,16 @@ def test_the_optimizations_of_figures_reoptimize_keep_their_rollouts_the_same_wa
     assert json.loads(target.read_text())["checkpoint"] is True
     assert len(json.loads(fallback.read_text())["history"]) == 8
     assert sum(line.startswith("warning: checkpoint not written") for line in lines) == 1
+
+
+def test_a_writer_that_fails_with_a_long_message_is_reported_by_its_first_line(tmp_path):
+    from cobra_ref.infra.output import atomic_write
+
+    def ffmpeg_like(tmp):  # imageio-ffmpeg reports a broken pipe to ffmpeg as one OSError over many lines
+        raise OSError("[Errno 32] Broken pipe\n\nFFMPEG COMMAND:\nffmpeg -y ...\n\nFFMPEG STDERR OUTPUT:\n")
+
+    with pytest.raises(OutputError) as info:
+        atomic_write(tmp_path / "run.mp4", ffmpeg_like)
+    target = str(tmp_path / "run.mp4")
+    assert str(info.value) == f"cannot write output {target!r}: [Errno 32] Broken pipe; nothing was written"
+    assert leftovers(tmp_path) == []

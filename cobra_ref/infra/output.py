@@ -138,7 +138,8 @@ def write_error(path, what: str, exc: OSError) -> OutputError:
     """The ``OutputError`` of a write that failed with ``exc``: one line naming the file, the
     system's reason and that the file as it was is kept (the writes are atomic).
     """
-    cause = exc.strerror or str(exc) or type(exc).__name__
+    # the system's reason; a writer's own message (ffmpeg's, over many lines) by its first line
+    cause = exc.strerror or next(iter(str(exc).strip().splitlines()), "") or type(exc).__name__
     kept = "its previous content is unchanged" if os.path.lexists(path) else "nothing was written"
     return OutputError(f"cannot write {what} {os.fspath(path)!r}: {cause}; {kept}")
 
