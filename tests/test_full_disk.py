@@ -325,3 +325,18 @@ def test_a_writer_that_fails_with_a_long_message_is_reported_by_its_first_line(t
     target = str(tmp_path / "run.mp4")
     assert str(info.value) == f"cannot write output {target!r}: [Errno 32] Broken pipe; nothing was written"
     assert leftovers(tmp_path) == []
+
+
+def test_a_gif_the_disk_cannot_take_is_not_drawn_again_with_the_other_renderer(tmp_path, monkeypatch):
+    from cobra_ref.reproduce.figures import animate
+
+    target, drawn = str(tmp_path / "anim_C.gif"), []
+
+    def mujoco_gif(gait, traj, path):
+        raise OutputError(f"cannot write output {path!r}: {NO_SPACE}; nothing was written")
+
+    monkeypatch.setattr(animate, "mujoco_gif", mujoco_gif)
+    monkeypatch.setattr(animate, "matplotlib_gif", lambda *args: drawn.append(args))
+    with pytest.raises(OutputError, match=NO_SPACE):
+        animate.animate_one(None, "C", None, target, problem=None)
+    assert drawn == []
