@@ -21,6 +21,9 @@ import time
 import numpy as np
 import pytest
 
+from cobra_ref.cli import main
+from cobra_ref.infra.signals import Terminated, exit_status, received, signal_name, stop_signals
+
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
@@ -110,15 +113,33 @@ class Reader(threading.Thread):
             time.sleep(0.05)
 
 
+def start(argv, tmp_path):
+    """``python -m cobra_ref ARGV`` in a session of its own, in ``tmp_path``; (process, stderr reader)."""
+    env = dict(os.environ, PYTHONPATH=REPO + os.pathsep + os.environ.get("PYTHONPATH", ""), MPLBACKEND="Agg")
+    process = subprocess.Popen([sys.executable, "-m", "cobra_ref", *argv], cwd=tmp_path, env=env,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+    reader = Reader(process.stderr)
+    reader.start()
+    return process, reader
+
+
+def wait_for_session_end(sid: int, seconds: float = 10.0) -> list:
+    """The processes of session ``sid`` still running after at most ``seconds`` (then killed, so a
+    failing test leaves nothing behind)."""
+    deadline = time.monotonic() + seconds
+    while session(sid) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    left = session(sid)
+    for pid in left:
+        os.kill(pid, signal.SIGKILL)
+    return left
+
+
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 @pytest.mark.parametrize("command, argv, started, check_kept, signum, target, status", PARAMS)
 def test_a_signal_ends_the_command_its_workers_and_keeps_what_was_computed(
         tmp_path, command, argv, started, check_kept, signum, target, status):
-    env = dict(os.environ, PYTHONPATH=REPO + os.pathsep + os.environ.get("PYTHONPATH", ""), MPLBACKEND="Agg")
-    process = subprocess.Popen([sys.executable, "-m", "cobra_ref", *argv(tmp_path)], cwd=tmp_path, env=env,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
-    reader = Reader(process.stderr)
-    reader.start()
+    process, reader = start(argv(tmp_path), tmp_path)
     try:
         reader.wait_for(started, process, timeout=120)
         helpers = [pid for pid in session(process.pid) if pid != process.pid]
@@ -130,12 +151,52 @@ def test_a_signal_ends_the_command_its_workers_and_keeps_what_was_computed(
             os.killpg(process.pid, signal.SIGKILL)
             process.wait()
     reader.join(5)
-    deadline = time.monotonic() + 10
-    while session(process.pid) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    assert session(process.pid) == [], "a worker or helper process outlived the command"
+    assert wait_for_session_end(process.pid) == [], "a worker or helper process outlived the command"
     said = reader.data.decode()
     name = "SIGTERM" if signum == signal.SIGTERM else "Ctrl-C"
     last = said.rstrip("\n").split("\n")[-1]
     assert "Traceback" not in said and last.startswith(f"interrupted ({name}): "), said[-2000:]
     check_kept(tmp_path, last)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="PR_SET_PDEATHSIG is Linux's")
+def test_the_workers_die_with_the_command_even_when_it_is_killed(tmp_path):
+    """SIGKILL cannot be handled: the kernel ends the workers (executors.helper_init) instead."""
+    process, reader = start(optimize(tmp_path), tmp_path)
+    try:
+        reader.wait_for(b"iteration  0/", process, timeout=120)
+        workers = [pid for pid in session(process.pid) if pid != process.pid]
+        assert len(workers) >= 2
+        os.kill(process.pid, signal.SIGKILL)
+        assert process.wait(timeout=10) == -signal.SIGKILL
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+    assert wait_for_session_end(process.pid) == [], "a worker outlived the killed command"
+
+
+# ------------------------------------------------------------------ the handler, in this process
+
+@pytest.mark.parametrize("signum, raised, status, name", [
+    (signal.SIGTERM, Terminated, 143, "SIGTERM"),
+    (signal.SIGINT, KeyboardInterrupt, 130, "Ctrl-C"),
+])
+def test_inside_stop_signals_a_signal_raises_once_and_names_its_exit_status(signum, raised, status, name):
+    before = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGINT)}
+    with stop_signals():
+        with pytest.raises(raised) as caught:
+            signal.raise_signal(signum)
+            time.sleep(5)  # not reached: the handler raises first
+        signal.raise_signal(signum)  # a repeat while the first is handled: ignored
+        signal.raise_signal(signal.SIGTERM)
+        assert received() == signum
+    assert type(caught.value) is raised and exit_status(caught.value) == status
+    assert signal_name(caught.value) == name
+    assert {s: signal.getsignal(s) for s in before} == before  # the library's handlers are back
+
+
+def test_the_command_line_leaves_the_handlers_as_it_found_them(capsys):
+    before = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGINT)}
+    assert main(["info"]) == 0
+    assert {s: signal.getsignal(s) for s in before} == before

@@ -24,6 +24,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="cobra-ref",
         description="Reference implementation of COBRA's non-impulsive contact-implicit "
                     "loco-manipulation (arXiv 2404.08714).",
+        epilog="Ctrl-C or SIGTERM (timeout, Slurm, systemd, docker stop) stops any command: its worker "
+               "processes end within seconds, what was computed is kept and named on one line of stderr, and "
+               "the exit status is 130 after Ctrl-C, 143 after SIGTERM.",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -52,4 +55,4 @@ def main(argv=None) -> int:
         except BaseException as exc:
             if not interrupted(exc):
                 raise
-            raise interrupted_exit(exc, f"cobra-ref {args.command} stopped; nothing of it was kept") from None
+            raise interrupted_exit(exc, f"cobra-ref {args.command} stopped; nothing was kept") from None
