@@ -66,8 +66,8 @@ def _kept(exc: BaseException, out: str, cache_dir: str) -> str:
     if kept is None:  # interrupted before or after the simulations
         return (f"the simulations finished are in the cache {cache_dir}, the figures and reports written "
                 f"before the interrupt in {out}; the next run reads the cache")
-    return (f"{len(kept['stored'])} of the {kept['todo']} simulations to run finished and are kept in the cache "
-            f"{kept['cache_dir']} (the next run reads them); files written before: in {out}")
+    return (f"{len(kept['stored'])} of the {kept['todo']} simulations to run finished, kept in the cache "
+            f"{kept['cache_dir']} (the next run reads them); no figure was drawn")
 
 
 def _committed_claims(out_dir: str) -> list:
