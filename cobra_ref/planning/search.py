@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..infra.executors import default_executor, shutdown
+from ..infra.signals import signal_name
 from ..gaits import gait_params
 from .cost import cost_without_impact, evaluate
 from .problem import DEFAULT_MAXITER, DEFAULTS, ShootingError, ShootingProblem, make_problem
@@ -237,13 +238,14 @@ def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), 
     ``checkpoint``: a callable taking a ``ShootingResult`` of every rollout so far (``checkpoint``
     true), called after each batch: the CLI writes it to the params JSON as the search goes.
     Ctrl-C (KeyboardInterrupt) stops the search and returns the best rollout found so far with
-    ``interrupted=True``. The result is the same for any executor (the rollouts are deterministic
-    and each batch is collected in order).
+    ``interrupted=True`` (before any rollout finished, the KeyboardInterrupt goes on). The result
+    is the same for any executor (the rollouts are deterministic and each batch is collected in
+    order).
     """
     own = executor is None
     executor = default_executor(workers) if own else executor
     evals = _Evaluations(problem, executor, progress, search.maxiter, _width(executor, workers if own else None))
-    interrupted, message = False, ""
+    stop, message = None, ""  # stop: the interrupt that ended the search early
     run = _compass_search if search.method == "pattern" else _differential_evolution
     companion = search.companion and problem.weights.impact > 0
     iterations = 0
@@ -258,14 +260,14 @@ def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), 
             _announce_companion(problem, search, evals)
             evals.label, evals.search, evals.iteration = "without the impact term: ", "J - w_I I", 0
             message += "; without the impact term: " + run(problem, evals.without_impact, search)
-    except KeyboardInterrupt:
-        interrupted, message = True, "interrupted (Ctrl-C): the best rollout so far is kept"
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM under the command line (signals.Terminated)
+        stop, message = exc, f"interrupted ({signal_name(exc)}): the best rollout so far is kept"
     finally:
         if own:
-            shutdown(executor, interrupted)
-    if not evals.history:
-        raise ShootingError("interrupted before any rollout finished: nothing to keep")
-    return _result(problem, search, evals, iterations, interrupted, message)
+            shutdown(executor, stop is not None)
+    if not evals.history:  # interrupted before any rollout finished: nothing to keep
+        raise stop if stop is not None else ShootingError("no rollout finished")
+    return _result(problem, search, evals, iterations, stop is not None, message)
 
 
 def _result(problem: ShootingProblem, search: SearchOptions, evals: _Evaluations, iterations: int,
