@@ -113,6 +113,11 @@ BAD = [
      ["box_gap = -1 m"]),
     ("problem-settings-dict", lambda c: sh.make_problem("C", GOAL, 0.02, {"dt": 1e-3}), T, ["settings = {'dt': 0.001}"]),
     ("problem-space-dict", lambda c: sh.make_problem("C", GOAL, 0.02, space={}), T, ["space = {}", "DecisionSpace"]),
+    ("space-names-str", lambda c: sh.DecisionSpace(names="frequency"), T,
+     ["space.names = 'frequency' is one str", "('frequency',)"]),
+    ("space-bounds-list", lambda c: sh.DecisionSpace(bounds=[0.5, 1.0]), T, ["space.bounds = [0.5, 1.0] is a list"]),
+    ("space-ramp-negative", lambda c: sh.DecisionSpace(ramp_time=-0.1), sh.ShootingError,
+     ["space.ramp_time = -0.1 s is out of range", "[0, 100] s"]),
     ("problem-cobra-str", lambda c: sh.make_problem("C", GOAL, 0.02, cobra="cobra"), T, ["cobra = 'cobra'"]),
     ("problem-gait-None", lambda c: sh.make_problem(None, GOAL, 0.02), T, ["gait_name = None", "sidewinding"]),
     # rollout

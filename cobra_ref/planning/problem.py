@@ -161,6 +161,17 @@ class DecisionSpace:
     x0: dict | None = None
     ramp_time: float = RAMP_TIME
 
+    def __post_init__(self):
+        """Each field of its kind: ``names`` a sequence of names (one name alone is refused: a str is
+        a sequence of letters), ``bounds`` and ``x0`` dicts, ``ramp_time`` by ``RULES["ramp_time"]``
+        (the command line's --ramp-time)."""
+        if isinstance(self.names, str):
+            raise arguments.ArgumentTypeError(f"space.names = {self.names!r} is one str, not a sequence of names "
+                                              f"(allowed: a tuple of names, e.g. ({self.names!r},))")
+        for name in ("bounds", "x0"):
+            arguments.instance(f"space.{name}", getattr(self, name), dict, "{'frequency': ...}", optional=True)
+        arguments.number("space.ramp_time", self.ramp_time, "ramp_time", ShootingError)
+
 
 @dataclass(frozen=True)
 class ShootingProblem:
