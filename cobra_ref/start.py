@@ -97,7 +97,8 @@ def initial_state(model: Model, reference, settings: StepSettings = StepSettings
 
     Implements: the start at rest (assumption A25): the joints hold the reference's t = 0
     shape while the robot and the box come to rest on the ground under ``settings``' contact
-    law and servo; what is left of their motion (below SETTLE_SPEED) is returned as qd0.
+    law and servo; what is left of their motion (below SETTLE_SPEED) is returned as qd0. The
+    arguments are checked first (``check_run_arguments``; ``placement`` a ``BoxPlacement``).
     """
     check_run_arguments(model, reference, settings, stepper)
     arguments.instance("placement", placement, BoxPlacement, "BoxPlacement(gap=0.05)")
