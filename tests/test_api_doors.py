@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from cobra_ref import (ArgumentError, ArgumentTypeError, BoxPlacement, StepSettings, Trajectory, cobra_model, gait,
-                       initial_state, simulate)
+                       initial_state, make_stepper, simulate)
 from cobra_ref.gaits import GaitError
 from cobra_ref.planning import problem as sh
 from cobra_ref.reference import ReferenceError, load_reference
@@ -84,6 +84,11 @@ BAD = [
     ("initial-state-model-None", lambda c: initial_state(None, c.ref), T, ["model = None"]),
     ("initial-state-settings-str", lambda c: initial_state(c.model, c.ref, "fast"), T, ["settings = 'fast'"]),
     ("initial-state-stepper-None", lambda c: initial_state(c.model, c.ref, stepper=None), T, ["stepper = None"]),
+    # the model and the stepper a notebook builds first
+    ("cobra-model-dict", lambda c: cobra_model({"mu": 0.8}), T, ["params = {'mu': 0.8}", "CobraParameters"]),
+    ("make-stepper-model-None", lambda c: make_stepper("fast", None), T, ["model = None", "a Model"]),
+    ("make-stepper-settings-float", lambda c: make_stepper("fast", c.model, 0.001), T,
+     ["settings = 0.001 is a float", "StepSettings"]),
     # gait
     ("gait-amplitude-str", lambda c: gait("C", amplitude="0.5"), T,
      ["amplitude = '0.5' is not a number", "(0, pi/2] rad"]),
