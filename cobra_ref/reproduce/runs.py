@@ -47,12 +47,13 @@ from ..infra.executors import worker_init
 from ..params import CobraParameters
 from ..placement import TravelPlacement, travel_placement
 from ..infra.progress import progress_printer
-from ..infra.validation import DEFAULT_DT
+from ..infra.validation import DEFAULT_DT, check
 from ..robots import cobra_model
 from ..simulate import simulate
 from ..start import BoxPlacement, initial_state
 from ..step import SimulationError, StepSettings
 from ..trajectory import Trajectory
+from .cache import read_trajectory, seal_trajectory, verified
 from .ensemble import Member
 
 PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
@@ -120,9 +121,9 @@ def run(spec: RunSpec, cache_dir: str, force: bool = False, progress=None) -> tu
     One gait run of the figure command (module docstring: cache key, box placement).
     """
     if not force:
-        cached = cached_path(spec, cache_dir)
-        if cached:
-            return Trajectory.from_npz(cached), True
+        cached = load(spec, cache_dir)
+        if cached is not None:
+            return cached, True
     traj, failed = simulate_spec(spec, progress)
     store(spec, cache_dir, traj, failed)
     return traj, False
@@ -176,11 +177,13 @@ def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Traject
 
 
 def store(spec: RunSpec, cache_dir: str, traj: Trajectory, failed: bool) -> str:
-    """Write ``traj`` to the cache (``<name>.npz``, or ``<name>.failed.npz`` for a failed run); return the path.
+    """Write ``traj`` to the cache (``<name>.npz``, or ``<name>.failed.npz`` for a failed run), its
+    key and content hash in its ``meta`` (``cache.seal_trajectory``); return the path.
     """
     path = os.path.join(cache_dir, spec.filename())
     out = path[:-4] + ".failed.npz" if failed else path
     os.makedirs(cache_dir, exist_ok=True)
+    seal_trajectory(traj, spec.key())
     traj.to_npz(out)
     return out
 
@@ -193,6 +196,13 @@ def cached_path(spec: RunSpec, cache_dir: str) -> str | None:
         if os.path.isfile(p):
             return p
     return None
+
+
+def load(spec: RunSpec, cache_dir: str) -> Trajectory | None:
+    """The cached run of ``spec`` if the cache holds it whole (``cache.read_trajectory``: its key,
+    arrays and content hash), else None; a damaged entry is named on stderr and removed."""
+    path = cached_path(spec, cache_dir)
+    return None if path is None else verified(path, lambda p: read_trajectory(p, spec.key()))
 
 
 def _run_in_worker(spec: RunSpec, queue=None, placement=None):
@@ -223,7 +233,9 @@ def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = No
     here.
     """
     specs = list(specs)
-    todo = list(dict.fromkeys(s for s in specs if force or not cached_path(s, cache_dir)))
+    check_workers(workers)
+    done = {} if force else {s: t for s in dict.fromkeys(specs) if (t := load(s, cache_dir)) is not None}
+    todo = [s for s in dict.fromkeys(specs) if s not in done]
     todo.sort(key=lambda s: -s.duration)  # the longest runs first: no core waits alone for one at the end
     if todo:
         workers = workers or min(len(todo), os.cpu_count() or 1)
@@ -240,7 +252,15 @@ def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = No
             for i, s in enumerate(todo):
                 label = f"  run {i + 1}/{len(todo)} {s.label()}"
                 store(s, cache_dir, *simulate_spec(s, progress_printer(label) if progress else None))
-    return {s: run(s, cache_dir)[0] for s in specs}
+    # the runs just made, read back as every cached one was (a damaged one here is an error, not recomputed)
+    done |= {s: read_trajectory(cached_path(s, cache_dir), s.key()) for s in todo}
+    return {s: done[s] for s in specs}
+
+
+def check_workers(workers) -> None:
+    """A ``ValidationError`` unless ``workers`` is None (the cores) or a whole number >= 1."""
+    if workers is not None:
+        check("workers", workers)
 
 
 def _run_on(executor, todo, cache_dir: str, progress: bool, queue) -> None:
