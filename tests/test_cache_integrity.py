@@ -217,9 +217,12 @@ def test_a_figure_overwritten_with_garbage_is_drawn_again(tmp_path, capsys):
     assert Stamps(str(tmp_path)).kept("fig", "stamp-1") == [png]
 
 
-def test_a_foreign_stamps_file_keeps_nothing(tmp_path):
-    (tmp_path / ".stamps.json").write_text('[1, 2]')
+@pytest.mark.parametrize("text, reason", [("[1, 2]", "not a JSON object"), ('{"fig": ', "unreadable")])
+def test_a_damaged_stamps_file_is_named_and_keeps_nothing(text, reason, tmp_path, capsys):
+    (tmp_path / ".stamps.json").write_text(text)
     assert Stamps(str(tmp_path)).kept("fig", "stamp-1") is None
+    err = capsys.readouterr().err
+    assert err.startswith(f"cache entry {tmp_path / '.stamps.json'} is damaged (") and reason in err
 
 
 # ---------------------------------------------------------------- refused before any work

@@ -11,13 +11,14 @@ Steps:
 1. simulate the five gaits (C, S, J, J-mirror, sidewinding), each as an ensemble of N members
    (``MEMBERS`` = 8 by default; ``ensemble.members``, assumption A29): member 0 is the figure run
    (10 s, 1 s with ``quick``), members 1 .. N-1 run ``ENSEMBLE_DURATION`` = 6 s (1 s with
-   ``quick``), on both cores (or any executor), or read from the cache (``reproduce``: keyed by
-   a hash of every input). A gait with a params JSON in the optimized directory
+   ``quick``), on both cores (or any executor), or read from the cache (``runs``: keyed by
+   a hash of every input; each entry checked on read against its key and content, ``cache``). A gait with a params JSON in the optimized directory
    (``cobra_ref/optimized/<gait>.json`` by default) runs with its optimized parameters, the
    others with their defaults;
 2. write each figure from the member-0 runs, figs. 6 and 9 with the members' spread; a figure
    whose inputs (the simulations' cache keys and the figure package's source) are unchanged
-   since it was last written is kept (``.stamps.json`` in the output directory), unless ``force``;
+   since it was last written, and whose files still hold what was written, is kept
+   (``.stamps.json`` in the output directory), unless ``force``;
    ``fig_optimization`` and ``fig_directions`` come from the params JSONs (each optimum
    replayed once, its box path cached);
 3. judge the claims on the ensembles: every member over the same window, its first

@@ -10,7 +10,9 @@ input: the spec, the model parameters (``CobraParameters``), the stepper setting
 source code of every module the simulation runs (so editing the physics invalidates the cache,
 editing a figure does not). A nominal member adds nothing to the key: member 0 is the nominal run.
 A run that fails mid-way is stored as ``<name>.failed.npz`` with what it computed and its error,
-and the figures use that partial trajectory (the claims report says so). ``run_all`` sends the
+and the figures use that partial trajectory (the claims report says so). Each entry records its key
+and a SHA-256 of its arrays in its ``meta`` and is checked on read (``cache.read_trajectory``): a
+damaged or foreign entry is named on stderr, simulated again and replaced. ``run_all`` sends the
 runs to any ``concurrent.futures.Executor`` and reads every result back from the cache, so the
 numbers do not depend on where the runs ran.
 

@@ -15,7 +15,7 @@ import os
 import sys
 
 from ..infra.output import write_text
-from .cache import file_sha256
+from .cache import CacheDamage, file_sha256, verified
 
 STAMPS = ".stamps.json"
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -42,8 +42,9 @@ class Stamps:
 
     def __init__(self, out_dir: str, force: bool = False):
         self.path = os.path.join(out_dir, STAMPS)
-        stamps = {} if force else read_json(self.path)
-        self.stamps = stamps if isinstance(stamps, dict) else {}
+        # a stamps file that is not a JSON object is named (``cache.verified``): every figure is drawn again
+        stamps = None if force or not os.path.isfile(self.path) else verified(self.path, _read_stamps)
+        self.stamps = stamps or {}
 
     def kept(self, name: str, stamp: str) -> list | None:
         """The files of figure ``name`` if they were written under ``stamp`` and each still has the
@@ -70,13 +71,13 @@ class Stamps:
         write_text(self.path, json.dumps(self.stamps, indent=1))
 
 
-def read_json(path: str) -> dict:
-    """The JSON object in ``path``, or {} if there is none or it is not readable."""
-    try:
-        with open(path) as f:
-            return json.load(f)
-    except (OSError, ValueError):
-        return {}
+def _read_stamps(path: str) -> dict:
+    """The stamps in ``path``; ``CacheDamage`` unless it is a JSON object."""
+    with open(path, encoding="utf-8") as f:
+        stamps = json.load(f)
+    if not isinstance(stamps, dict):
+        raise CacheDamage(f"not a JSON object of stamps but a {type(stamps).__name__}")
+    return stamps
 
 
 def clean(x):
