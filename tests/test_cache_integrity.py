@@ -253,3 +253,24 @@ def test_figures_refuses_a_bad_cache_or_jobs_before_any_work(option, status, wor
 def test_run_all_refuses_a_bad_worker_count(workers, tmp_path):
     with pytest.raises(ValueError, match="workers"):
         run_all([SPEC], str(tmp_path), workers=workers)
+
+
+def test_mujoco_submit_computes_rows_whose_entry_is_damaged(tmp_path, monkeypatch, capsys):
+    """The MuJoCo job reads its entry through the check: whole, it is used; damaged, the rows are computed."""
+    pytest.importorskip("mujoco")
+    from types import SimpleNamespace
+
+    from cobra_ref.reproduce import mujoco_job
+
+    key = "b" * 64
+    monkeypatch.setattr(mujoco_job, "mujoco_key", lambda boxed, runs, duration: key)
+    monkeypatch.setattr(mujoco_job, "_mujoco_compute", lambda side, boxed, runs, duration: ["computing"])
+    specs, runs = {"C": ["C#0"]}, {"C#0": SimpleNamespace(error="", duration=1.0)}
+    cache = str(tmp_path)
+    write_rows(os.path.join(cache, f"mujoco-{key[:16]}.json"), key, ROWS)
+    job = mujoco_job.mujoco_submit(None, specs, runs, 1.0, cache, False, False)
+    assert job["rows"] == ROWS and job["futures"] == []
+    open(job["cached"], "w").write('{"key": "' + key + '", "rows": [')
+    job = mujoco_job.mujoco_submit(None, specs, runs, 1.0, cache, False, False)
+    assert job["rows"] is None and job["futures"] == ["computing"]
+    assert capsys.readouterr().err.startswith(f"cache entry {job['cached']} is damaged (unreadable: JSONDecodeError")
