@@ -19,7 +19,7 @@ def cmd_figures(args) -> int:
     """Regenerate figures 3-9, the GIFs and the claims report; Ctrl-C or SIGTERM ends the workers
     and says what was kept (exit status 130 or 143).
     """
-    from ..reproduce.regenerate import OPTIMIZED_DIR, FiguresOptions, check_output_dir, regenerate
+    from ..reproduce.regenerate import CACHE_PROBE, OPTIMIZED_DIR, FiguresOptions, check_output_dir, regenerate
     from ..reproduce.runs import PAPER_GAITS
 
     gaits = PAPER_GAITS if args.gaits is None else tuple(g.strip() for g in args.gaits.split(","))
@@ -34,8 +34,10 @@ def cmd_figures(args) -> int:
     committed = _committed_claims(out) if args.check else None
     try:
         check_output_dir(out)
+        check_output_dir(os.path.join(out, ".cache") if args.cache is None else args.cache, "--cache directory",
+                         CACHE_PROBE)
     except OSError as exc:
-        raise SystemExit(f"error: {exc}")
+        raise fail(exc) from None
     with c_stdout_silenced():
         mujoco = True if args.mujoco else (False if args.no_mujoco else None)
         options = FiguresOptions(quick=args.quick, force=args.force, mujoco=mujoco, gaits=gaits,
@@ -137,7 +139,8 @@ def add_parsers(sub) -> None:
                         "(unless --mujoco), PNG only, outputs marked as a smoke run; never compared by --check")
     p.add_argument("--force", action="store_true", help="ignore the cache: simulate and draw everything again")
     p.add_argument("--cache", default=None, help="simulation cache directory (default OUT/.cache)")
-    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: the number of cores)")
+    p.add_argument("--jobs", type=RULES["workers"].arg("--jobs"), default=None,
+                   help="worker processes (default: the number of cores)")
     p.add_argument("--gaits", default=None, help="comma-separated subset of C,S,J,J-mirror,sidewinding")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--no-mujoco", action="store_true", help="skip the MuJoCo rollout cross-check")

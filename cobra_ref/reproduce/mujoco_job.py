@@ -5,7 +5,7 @@ its claims and its figure.
 (b) per gait the first K = min(N, ``MUJOCO_MEMBERS``) members of the ensemble, each from its own
 settled start (q0, qd0) with its own friction scale, the box displacement after ``BOX_DURATION``
 seconds (or the ensemble window if shorter), ours read off the member's run. Every row is cached
-under a hash of its inputs (``mujoco_key``).
+under a hash of its inputs (``mujoco_key``), checked on read (``cache.read_rows``).
 
 Why K = 4: MuJoCo's box rollouts run at 0.1 ms steps; 4 members per gait keep the comparison
 short on two cores and still give a spread (min-max of 4) to compare against (docs/results.md,
@@ -19,9 +19,9 @@ import json
 import os
 import time
 
-from ..infra.output import write_text
 from ..provenance import physics_hash
-from .stamps import Stamps, clean, figure_stamp, read_json, say
+from .cache import read_rows, verified, write_rows
+from .stamps import Stamps, clean, figure_stamp, say
 
 MUJOCO_MEMBERS = 4  # members per gait in the MuJoCo box comparison: K = min(N, 4)
 BOX_DURATION = 3.0  # [s] the box comparison with MuJoCo (0.1 ms steps there: 30 000 per member)
@@ -46,7 +46,7 @@ def mujoco_submit(side, specs: dict, runs: dict, window_s: float, cache_dir: str
     job = {"key": key, "cached": os.path.join(cache_dir, f"mujoco-{key[:16]}.json"), "gaits": len(done), "k": k,
            "t0": time.perf_counter(), "rows": None, "futures": []}
     if os.path.isfile(job["cached"]) and not force:
-        job["rows"] = read_json(job["cached"]).get("rows")
+        job["rows"] = verified(job["cached"], lambda p: read_rows(p, key))
     if job["rows"] is None:
         job["futures"] = _mujoco_compute(side, boxed, runs, duration)
     return job
@@ -66,7 +66,7 @@ def mujoco_rows(job: dict | None, out_dir: str, progress, files: list) -> list[d
     if job["rows"] is None:
         job["rows"] = [row for f in job["futures"] for row in f.result()]
         os.makedirs(os.path.dirname(job["cached"]), exist_ok=True)
-        write_text(job["cached"], json.dumps({"key": job["key"], "rows": clean(job["rows"])}))
+        write_rows(job["cached"], job["key"], clean(job["rows"]))
         what = "computed"
     else:
         what = "from the cache"

@@ -19,8 +19,8 @@ import time
 import numpy as np
 
 from ..infra.executors import SerialExecutor, own_pool
-from ..infra.output import atomic_write
 from ..provenance import PLANNING_MODULES, physics_hash
+from .cache import read_path, verified, write_path
 from .runs import PAPER_GAITS
 from .stamps import say
 
@@ -86,7 +86,7 @@ def replays_submit(executor, directory: str, gaits, cache_dir: str) -> list:
     if not os.path.isdir(directory):
         return []
     return [executor.submit(replayed_box_path, p, cache_dir) for p in optimum_paths(directory, gaits)
-            if not _records_box_path(p) and not os.path.isfile(_replay_cache(p, cache_dir))]
+            if not _records_box_path(p) and _cached_replay(p, cache_dir) is None]
 
 
 def _records_box_path(path: str) -> bool:
@@ -134,24 +134,37 @@ def optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, pr
 
 def replayed_box_path(path: str, cache_dir: str) -> np.ndarray:
     """(n, 2) box path of the optimum of the params JSON ``path``, replayed once and cached under a
-    hash of the JSON and the physics source."""
+    hash of the JSON and the physics source (the entry checked on read: ``cache.read_path``)."""
     from ..planning.results import replay
 
-    cached = _replay_cache(path, cache_dir)
-    if os.path.isfile(cached):
-        return np.load(cached)
+    xy = _cached_replay(path, cache_dir)
+    if xy is not None:
+        return xy
     traj, _ = replay(path)
     xy = traj.box_pose[:, :2].copy()
+    key = _replay_key(path)
     os.makedirs(cache_dir, exist_ok=True)
-    atomic_write(cached, lambda tmp: np.save(tmp, xy))
+    write_path(_replay_file(key, cache_dir), key, xy)
     return xy
 
 
-def _replay_cache(path: str, cache_dir: str) -> str:
-    """Where ``replayed_box_path`` caches the optimum ``path``: a hash of the JSON and the physics source."""
+def _cached_replay(path: str, cache_dir: str) -> np.ndarray | None:
+    """The cached box path of the optimum ``path`` if the cache holds it whole, else None (a damaged
+    entry is named on stderr and removed: ``cache.verified``)."""
+    key = _replay_key(path)
+    cached = _replay_file(key, cache_dir)
+    return verified(cached, lambda p: read_path(p, key)) if os.path.isfile(cached) else None
+
+
+def _replay_key(path: str) -> str:
+    """The key of the optimum ``path``'s replay: SHA-256 of the JSON and the physics source."""
     with open(path, "rb") as f:
-        key = hashlib.sha256(f.read() + physics_hash(PLANNING_MODULES).encode()).hexdigest()[:16]
-    return os.path.join(cache_dir, f"optimum-{key}.npy")
+        return hashlib.sha256(f.read() + physics_hash(PLANNING_MODULES).encode()).hexdigest()
+
+
+def _replay_file(key: str, cache_dir: str) -> str:
+    """Where ``replayed_box_path`` caches the replay of ``key``."""
+    return os.path.join(cache_dir, f"optimum-{key[:16]}.npz")
 
 
 def shown(path: str) -> str:

@@ -11,13 +11,14 @@ Steps:
 1. simulate the five gaits (C, S, J, J-mirror, sidewinding), each as an ensemble of N members
    (``MEMBERS`` = 8 by default; ``ensemble.members``, assumption A29): member 0 is the figure run
    (10 s, 1 s with ``quick``), members 1 .. N-1 run ``ENSEMBLE_DURATION`` = 6 s (1 s with
-   ``quick``), on both cores (or any executor), or read from the cache (``reproduce``: keyed by
-   a hash of every input). A gait with a params JSON in the optimized directory
+   ``quick``), on both cores (or any executor), or read from the cache (``runs``: keyed by
+   a hash of every input; each entry checked on read against its key and content, ``cache``). A gait with a params JSON in the optimized directory
    (``cobra_ref/optimized/<gait>.json`` by default) runs with its optimized parameters, the
    others with their defaults;
 2. write each figure from the member-0 runs, figs. 6 and 9 with the members' spread; a figure
    whose inputs (the simulations' cache keys and the figure package's source) are unchanged
-   since it was last written is kept (``.stamps.json`` in the output directory), unless ``force``;
+   since it was last written, and whose files still hold what was written, is kept
+   (``.stamps.json`` in the output directory), unless ``force``;
    ``fig_optimization`` and ``fig_directions`` come from the params JSONs (each optimum
    replayed once, its box path cached);
 3. judge the claims on the ensembles: every member over the same window, its first
@@ -60,7 +61,7 @@ from ..infra.validation import DEFAULT_DT
 from .mujoco_job import MUJOCO_MEMBERS, mujoco_rows, mujoco_submit
 from .optima import (DIRECTIONS, OPTIMIZED_DIR, optimization_figures, optimized_files, optimized_params,
                      reoptimize, replays_submit, shown)
-from .runs import PAPER_GAITS, RunSpec, run_all
+from .runs import PAPER_GAITS, RunSpec, check_workers, run_all
 from .stamps import Stamps, clean, figure_stamp, say
 
 __all__ = ["DIRECTIONS", "ENSEMBLE_DURATION", "FULL_DURATION", "FiguresOptions", "MEMBERS", "MUJOCO_MEMBERS",
@@ -79,19 +80,25 @@ SMOKE_TITLE = "SMOKE RUN (cobra-ref figures --quick): not the paper's results"  
 # phase-rate ramp and two 0.5 Hz periods after it (the steady-power and phase claims need two
 # periods after the ramp; sidewinding meets its box at about 1.5 s); the budget's lever
 ENSEMBLE_DURATION = 6.0
+CACHE_PROBE = "C-0000000000000000.npz"  # a cache entry's name: the file whose writing is tried before the runs
 
 
-def check_output_dir(out_dir: str) -> None:
-    """Create ``out_dir`` if needed; raise OSError naming it if it cannot be written (checked
-    before any simulation starts, so a bad directory costs nothing)."""
+def check_output_dir(out_dir: str, what: str = "output directory", probe: str = "claims.json") -> None:
+    """Create ``out_dir`` if needed; raise OSError naming it (as ``what``) if it is empty, not a
+    directory, or cannot be written (checked before any simulation starts, so a bad directory
+    costs nothing). ``probe``: the file whose writing is tried there."""
     from ..infra.output import check_output
 
+    if not isinstance(out_dir, (str, os.PathLike)) or not str(out_dir).strip():
+        raise OSError(f"{what} is empty: give a directory")
+    if os.path.exists(out_dir) and not os.path.isdir(out_dir):
+        raise OSError(f"{what} {out_dir} is not a directory")
     try:
         os.makedirs(out_dir, exist_ok=True)
     except OSError as exc:
-        raise OSError(f"cannot create output directory {out_dir}: {exc.strerror}") from exc
+        raise OSError(f"cannot create {what} {out_dir}: {exc.strerror}") from exc
     # a real probe (a temporary file created and removed): os.access answers yes to root everywhere
-    check_output(os.path.join(out_dir, "claims.json"), "the figures")
+    check_output(os.path.join(out_dir, probe), what)
 
 
 def specs_for(gaits=PAPER_GAITS, quick: bool = False, dt: float = DEFAULT_DT,
@@ -226,7 +233,9 @@ def regenerate(out_dir: str = "figures", options: FiguresOptions = FiguresOption
     """
     start = time.perf_counter()
     check_output_dir(out_dir)
-    cache_dir = cache_dir or os.path.join(out_dir, ".cache")
+    cache_dir = os.path.join(out_dir, ".cache") if cache_dir is None else cache_dir
+    check_output_dir(cache_dir, "cache directory", CACHE_PROBE)
+    check_workers(workers)
     optimized_dir = options.optimized_dir
     if options.reoptimize_all:
         optimized_dir = os.path.join(out_dir, "optimized")

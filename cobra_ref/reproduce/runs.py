@@ -10,7 +10,9 @@ input: the spec, the model parameters (``CobraParameters``), the stepper setting
 source code of every module the simulation runs (so editing the physics invalidates the cache,
 editing a figure does not). A nominal member adds nothing to the key: member 0 is the nominal run.
 A run that fails mid-way is stored as ``<name>.failed.npz`` with what it computed and its error,
-and the figures use that partial trajectory (the claims report says so). ``run_all`` sends the
+and the figures use that partial trajectory (the claims report says so). Each entry records its key
+and a SHA-256 of its arrays in its ``meta`` and is checked on read (``cache.read_trajectory``): a
+damaged or foreign entry is named on stderr, simulated again and replaced. ``run_all`` sends the
 runs to any ``concurrent.futures.Executor`` and reads every result back from the cache, so the
 numbers do not depend on where the runs ran.
 
@@ -48,12 +50,13 @@ from ..infra.output import write_error
 from ..params import CobraParameters
 from ..placement import TravelPlacement, travel_placement
 from ..infra.progress import end_line, progress_printer, rewrite
-from ..infra.validation import DEFAULT_DT
+from ..infra.validation import DEFAULT_DT, check
 from ..robots import cobra_model
 from ..simulate import simulate
 from ..start import BoxPlacement, initial_state
 from ..step import SimulationError, StepSettings
 from ..trajectory import Trajectory
+from .cache import read_trajectory, seal_trajectory, verified
 from .ensemble import Member
 
 PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
@@ -121,9 +124,9 @@ def run(spec: RunSpec, cache_dir: str, force: bool = False, progress=None) -> tu
     One gait run of the figure command (module docstring: cache key, box placement).
     """
     if not force:
-        cached = cached_path(spec, cache_dir)
-        if cached:
-            return Trajectory.from_npz(cached), True
+        cached = load(spec, cache_dir)
+        if cached is not None:
+            return cached, True
     traj, failed = simulate_spec(spec, progress)
     store(spec, cache_dir, traj, failed)
     return traj, False
@@ -177,7 +180,8 @@ def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Traject
 
 
 def store(spec: RunSpec, cache_dir: str, traj: Trajectory, failed: bool) -> str:
-    """Write ``traj`` to the cache (``<name>.npz``, or ``<name>.failed.npz`` for a failed run); return the path.
+    """Write ``traj`` to the cache (``<name>.npz``, or ``<name>.failed.npz`` for a failed run), its
+    key and content hash in its ``meta`` (``cache.seal_trajectory``); return the path.
 
     An ``OutputError`` names the file and the reason when it cannot be written (a full disk); the
     entries stored before are kept.
@@ -188,6 +192,7 @@ def store(spec: RunSpec, cache_dir: str, traj: Trajectory, failed: bool) -> str:
         os.makedirs(cache_dir, exist_ok=True)
     except OSError as exc:
         raise write_error(out, "cache entry", exc) from None
+    seal_trajectory(traj, spec.key())
     traj.to_npz(out)
     return out
 
@@ -200,6 +205,13 @@ def cached_path(spec: RunSpec, cache_dir: str) -> str | None:
         if os.path.isfile(p):
             return p
     return None
+
+
+def load(spec: RunSpec, cache_dir: str) -> Trajectory | None:
+    """The cached run of ``spec`` if the cache holds it whole (``cache.read_trajectory``: its key,
+    arrays and content hash), else None; a damaged entry is named on stderr and removed."""
+    path = cached_path(spec, cache_dir)
+    return None if path is None else verified(path, lambda p: read_trajectory(p, spec.key()))
 
 
 def _run_in_worker(spec: RunSpec, queue=None, placement=None):
@@ -230,7 +242,9 @@ def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = No
     here.
     """
     specs = list(specs)
-    todo = list(dict.fromkeys(s for s in specs if force or not cached_path(s, cache_dir)))
+    check_workers(workers)
+    done = {} if force else {s: t for s in dict.fromkeys(specs) if (t := load(s, cache_dir)) is not None}
+    todo = [s for s in dict.fromkeys(specs) if s not in done]
     todo.sort(key=lambda s: -s.duration)  # the longest runs first: no core waits alone for one at the end
     stored = []  # the cache files written by this call
     try:
@@ -238,7 +252,15 @@ def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = No
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: say what was kept (cli.figures)
         exc.kept = {"stored": list(stored), "todo": len(todo), "cache_dir": cache_dir}
         raise
-    return {s: run(s, cache_dir)[0] for s in specs}
+    # the runs just made, read back as every cached one was (a damaged one here is an error, not recomputed)
+    done |= {s: read_trajectory(cached_path(s, cache_dir), s.key()) for s in todo}
+    return {s: done[s] for s in specs}
+
+
+def check_workers(workers) -> None:
+    """A ``ValidationError`` unless ``workers`` is None (the cores) or a whole number >= 1."""
+    if workers is not None:
+        check("workers", workers)
 
 
 def _run_todo(todo, cache_dir: str, workers, progress: bool, executor, stored: list) -> None:
