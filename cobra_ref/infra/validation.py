@@ -33,7 +33,7 @@ from .rule import PairRule, Rule, ValidationError, as_list, check_choice, is_num
 
 __all__ = ["BYTES_PER_STEP", "DEFAULT_DT", "DT_MAX", "DT_MIN", "DT_WHY", "INERTIA_RULE", "MAX_STEPS", "MODEL_NUMBERS",
            "OPTIONAL_PARAMETERS", "PARAMETER_RULES", "RULES", "STEPS_WHY", "PairRule", "Rule", "ValidationError",
-           "check", "check_choice", "check_inertia", "check_parameters", "is_number", "number_text", "rule",
+           "check", "check_choice", "check_inertia", "check_parameters", "check_pose", "is_number", "number_text", "rule",
            "step_count", "time_grid"]
 
 # ----------------------------------------------------------------------------------------- time grid
@@ -187,6 +187,21 @@ def check_inertia(field: str, value) -> tuple:
     return tuple(moments)
 
 
+def check_pose(field: str, value) -> tuple:
+    """A free body's pose (x, y, z, qw, qx, qy, qz): seven finite numbers [m, -] whose quaternion
+    has unit norm (within 1e-6, the tolerance of ``Model.check_q``); a ``ValidationError`` naming
+    ``field`` otherwise."""
+    items = None if isinstance(value, (str, bytes)) else as_list(value)
+    if items is None or len(items) != 7 or not all(is_number(v) and math.isfinite(v) for v in items):
+        raise ValidationError(f"{field}: expected 7 finite numbers (x, y, z in m; qw, qx, qy, qz, a unit "
+                              f"quaternion), got {value!r}")
+    norm = math.sqrt(sum(float(v) ** 2 for v in items[3:]))
+    if abs(norm - 1.0) > 1e-6:
+        raise ValidationError(f"{field}: the quaternion (qw, qx, qy, qz) = ({', '.join(number_text(float(v)) for v in items[3:])}) "
+                              f"has norm {number_text(norm)} (allowed: a unit quaternion, norm 1 within 1e-6)")
+    return tuple(float(v) for v in items)
+
+
 def time_grid(duration, dt, exact: bool = True, duration_field: str = "duration", dt_field: str = "dt") -> int:
     """The number of steps of ``duration`` at ``dt``, both checked before anything is allocated
     (module docstring): ``dt`` within [DT_MIN, DT_MAX], then ``step_count``; for a caller whose
@@ -211,7 +226,7 @@ def step_count(duration, dt: float, exact: bool = True, duration_field: str = "d
     steps = duration / dt
     n = round(steps)
     if steps > MAX_STEPS + 0.5:
-        raise ValidationError(f"{duration_field} = {g(duration)} s at {dt_field} = {g(dt)} s is {steps:.4g} steps: "
+        raise ValidationError(f"{duration_field} = {g(duration)} s at {dt_field} = {g(dt)} s is {g(steps)} steps: "
                               f"at most {MAX_STEPS} steps per run ({STEPS_WHY}); shorten {duration_field} "
                               f"or lengthen {dt_field}")
     if n < 1:
@@ -221,6 +236,6 @@ def step_count(duration, dt: float, exact: bool = True, duration_field: str = "d
         lo, hi = math.floor(steps) * dt, math.ceil(steps) * dt
         options = " or ".join(f"{g(round(v, 12))} s" for v in (lo, hi) if v > 0)
         raise ValidationError(f"{duration_field} = {g(duration)} s is not a whole number of steps of {dt_field} = "
-                              f"{g(dt)} s ({steps:.4g} steps): use {duration_field} = {options}, or another "
+                              f"{g(dt)} s ({g(round(steps, 2))} steps): use {duration_field} = {options}, or another "
                               f"{dt_field}")
     return int(n)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import sys
 from dataclasses import asdict
 from typing import NamedTuple
 
@@ -125,8 +126,10 @@ def _read_weights(d, parts) -> dict:
 
 
 def _read_poses(d, parts) -> dict:
+    from ..infra.validation import check_pose
+
     direction = None if d["box_direction"] is None else _floats(d["box_direction"], 2, "box_direction")
-    return {"box_pose0": _floats(d["box_pose0"], 7, "box_pose0"),
+    return {"box_pose0": check_pose("box_pose0", d["box_pose0"]),
             "middle_pose0": _floats(d["middle_pose0"], 3, "middle_pose0"), "box_direction": direction}
 
 
@@ -276,6 +279,9 @@ def load_result(path: str) -> dict:
             record = json.load(f)
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ShootingError(f"{path}: not a readable JSON file ({exc})") from None
+    except RecursionError:  # json's decoder recurses once per level of nesting
+        raise ShootingError(f"{path}: not a params file of cobra-ref optimize: nested deeper than "
+                            f"{sys.getrecursionlimit()} levels") from None
     if not isinstance(record, dict) or record.get("format") != FORMAT:
         raise ShootingError(f"{path}: not a params file of cobra-ref optimize (expected format {FORMAT!r})")
     for key in ("params", "settings", "cost"):
@@ -382,26 +388,32 @@ class ParamsRun(NamedTuple):
     same_code: bool = True  # the physics modules' SHA-256 equals the one the optimum was found with
 
 
-def params_reference(path: str, duration: float | None = None) -> ParamsRun:
+def params_reference(path: str, duration: float | None = None, step: dict | None = None) -> ParamsRun:
     """Read a params JSON and return everything to replay its optimum with ``simulate``.
 
     For ``cobra-ref simulate --params``. ``duration`` None = the optimization's horizon (then
-    ``params_summary`` checks that the replayed cost equals the recorded one; else a whole number of
-    the optimization's steps). Raises ``ShootingError`` for a missing or malformed file or a bad
-    ``duration``.
+    ``params_summary`` checks that the replayed cost equals the recorded one); ``step``: the
+    ``StepSettings`` fields (dt, contact, servo) that replace the optimization's, with the start
+    settled under them, as the transfer check does. The horizon is a whole number of steps of the
+    replay's dt when either differs from the file's (``validation.step_count``). Raises
+    ``ShootingError`` for a missing or malformed file, a bad ``duration`` or step setting, or a
+    recorded start the model refuses.
     """
-    from ..infra.validation import ValidationError, time_grid
+    from ..infra.validation import ValidationError, step_count
+    from ..model import ModelError
 
     record = load_result(path)
     problem: ShootingProblem = record["problem"]
-    if duration is not None:
-        try:
-            time_grid(duration, problem.dt, exact=True)
-        except ValidationError as exc:
-            raise ShootingError(str(exc)) from None
-    x = decision_vector(problem, record["params"])
-    model = cobra_model(problem.cobra)
-    q0, qd0 = start_state(problem, x, model)
-    return ParamsRun(problem.gait, problem.reference(x), problem.settings,
-                     problem.duration if duration is None else float(duration), q0, qd0, model, problem,
+    try:
+        replayed = dataclasses.replace(problem, settings=dataclasses.replace(problem.settings, **(step or {})))
+        horizon = problem.duration if duration is None else float(duration)
+        # a new grid (another horizon or dt) is a whole number of steps; the file's own was checked on reading
+        step_count(horizon, replayed.dt, exact=duration is not None or replayed.dt != problem.dt,
+                   duration_field="--duration", dt_field="--dt" if "dt" in (step or {}) else "dt")
+        x = decision_vector(problem, record["params"])
+        model = cobra_model(problem.cobra)
+        q0, qd0 = start_state(replayed, x, model)
+    except (ValidationError, ModelError) as exc:
+        raise ShootingError(f"{path}: {exc}") from None
+    return ParamsRun(problem.gait, problem.reference(x), replayed.settings, horizon, q0, qd0, model, problem,
                      float(record["cost"]), record.get("code", {}).get("physics_sha256") == code_version(planning=True)["physics_sha256"])
