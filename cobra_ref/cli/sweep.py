@@ -7,7 +7,7 @@ import json
 import sys
 import time
 
-from ..infra.validation import RULES, ValidationError, check_choice
+from ..infra.validation import RULES, ValidationError, check_choice, step_count
 from .common import c_stdout_silenced, check_out, fail, write_text_atomic
 
 
@@ -25,9 +25,12 @@ def cmd_sweep(args) -> int:
     try:
         for law in laws:
             check_choice("--contact", law, LAWS)
+        todo = scenarios(args.n, args.seed, laws)
+        for s in todo:  # each scenario's horizon on its own dt: at least one step
+            step_count(args.duration, s.dt, exact=False, duration_field="--duration",
+                       dt_field=f"scenario {s.index}'s dt")
     except ValidationError as exc:
         raise fail(exc) from None
-    todo = scenarios(args.n, args.seed, laws)
     start, records = time.perf_counter(), []
     with c_stdout_silenced(), default_executor(args.jobs) as pool:
         futures = [pool.submit(run_scenario, s, args.duration) for s in todo]

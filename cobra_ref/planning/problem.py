@@ -79,7 +79,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..gaits import GaitError, gait, gait_params
-from ..infra.validation import DEFAULT_DT
+from ..infra.validation import DEFAULT_DT, number_text
 from ..kinematics import forward_kinematics
 from ..params import CobraParameters
 from ..quaternion import quat_mul
@@ -243,11 +243,12 @@ def check_goal(goal, duration: float) -> tuple:
     if g.shape != (2,) or not np.all(np.isfinite(g)):
         raise ShootingError(f"goal must be two finite numbers (dx, dy) in metres, got {goal!r}")
     d, reach = float(np.hypot(*g)), min(MAX_BOX_SPEED * duration, MAX_GOAL_DISTANCE)
+    said = f"({number_text(float(g[0]))}, {number_text(float(g[1]))}) m"
     if d < MIN_GOAL_DISTANCE:
-        raise ShootingError(f"goal {tuple(g)} is where the box starts (closer than {MIN_GOAL_DISTANCE} m)")
+        raise ShootingError(f"goal {said} is where the box starts (closer than {MIN_GOAL_DISTANCE} m)")
     if d > reach:
-        raise ShootingError(f"goal {tuple(g)} is unreachable: {d:.3f} m from the box's start, but in "
-                            f"{duration} s the robot can push it at most {reach:.3f} m "
+        raise ShootingError(f"goal {said} is unreachable: {number_text(round(d, 3))} m from the box's start, but in "
+                            f"{number_text(duration)} s the robot can push it at most {reach:.3f} m "
                             f"({MAX_BOX_SPEED} m/s, at most {MAX_GOAL_DISTANCE} m); "
                             "use a closer goal or a longer --duration")
     return float(g[0]), float(g[1])
