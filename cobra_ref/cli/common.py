@@ -12,8 +12,10 @@ One rule for explicit options: an option given on the command line is never igno
 conflicts with a file the command reads, it either wins and is recorded in the run's meta
 (``options``; ``simulate --params``: ``--duration``, ``--dt``, ``--contact``, ``--servo``, listed
 in ``options.overrides``), or it is an error (``simulate --params`` with an option that changes the
-model or the start: ``simulate.MODEL_OPTIONS``). "Given" means not None (``--mu 0`` is given): such
-options default to None and the command fills in its default. Every horizon goes through
+model or the start: ``simulate.MODEL_OPTIONS``). An option that does not apply to the rest of the
+command line is an error too (``optimize --seed`` or ``--popsize`` without ``--method de``,
+``render --fps`` or ``--speed`` for a PNG still). "Given" means not None (``--mu 0`` and
+``--params ''`` are given): such options default to None and the command fills in its default. Every horizon goes through
 ``validation.step_count`` (at least one step, at most ``MAX_STEPS``, a whole number of steps where
 the runs are compared or replayed). A command whose every rollout failed exits non-zero and writes
 no optimum. Files given to a command (params JSON, run NPZ) are checked by the rules of the command

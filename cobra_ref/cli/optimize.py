@@ -16,6 +16,8 @@ from ..step import StepSettings
 from ..infra.validation import DEFAULT_DT, RULES, ValidationError, number_text, step_count
 from .common import add_model_options, c_stdout_silenced, check_writable, fail, inputs_text, model_parameters
 
+DE_DEFAULTS = {"seed": 0, "popsize": 2}  # --method de's options unless given
+
 
 def _assignments(items, n_values: int, what: str) -> dict:
     """['name=a,b', ...] -> {name: (a, b)} (n_values = 2) or {name: a} (n_values = 1)."""
@@ -48,6 +50,16 @@ def _problem(args, goal, duration: float):
     except Exception as exc:  # noqa: BLE001 -- the box placement settles the start: any solver can fail
         raise fail(f"the box could not be placed: {type(exc).__name__}: {exc} "
                    f"({inputs_text(settings, cobra, box_gap=args.box_gap)})") from None
+
+
+def _de_options(args) -> dict:
+    """--seed and --popsize (``DE_DEFAULTS`` where not given); an error with --method pattern, which
+    has neither."""
+    given = {name: getattr(args, name) for name in DE_DEFAULTS if getattr(args, name) is not None}
+    if given and args.method != "de":
+        raise fail(f"{', '.join('--' + name for name in given)}: only --method de draws a population; "
+                   f"--method {args.method} has none (drop it, or add --method de)")
+    return {**DE_DEFAULTS, **given}
 
 
 def _xy(values) -> str:
@@ -103,9 +115,10 @@ def add_parsers(sub) -> None:
                    help="iterations: polls of the compass search, generations of DE (default 6)")
     p.add_argument("--method", choices=("pattern", "de"), default="pattern",
                    help="parallel compass search (default) or scipy differential evolution")
-    p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=0, help="random seed of --method de (default 0)")
-    p.add_argument("--popsize", type=RULES["popsize"].arg("--popsize"), default=2,
-                   help="--method de: population = max(5, POPSIZE x parameters) (default 2)")
+    p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=None,
+                   help=f"random seed of --method de (default {DE_DEFAULTS['seed']})")
+    p.add_argument("--popsize", type=RULES["popsize"].arg("--popsize"), default=None,
+                   help=f"--method de: population = max(5, POPSIZE x parameters) (default {DE_DEFAULTS['popsize']})")
     p.add_argument("--bound", action="append", default=[], metavar="NAME=LO,HI",
                    help="bounds of a gait parameter (repeatable; adds it to the decision vector)")
     p.add_argument("--start", action="append", default=[], metavar="NAME=VALUE",
@@ -127,6 +140,7 @@ def cmd_optimize(args) -> int:
     every rollout failed nothing is written and the status is 1 (130 after Ctrl-C).
     """
     check_writable(args.out)
+    de = _de_options(args)
     if args.workers is not None and args.workers < 1:
         raise SystemExit(f"error: --workers must be >= 1, got {args.workers}")
     d_goal, d_duration, d_maxiter = DEFAULTS[args.gait]
@@ -142,8 +156,7 @@ def cmd_optimize(args) -> int:
             f"maxiter {maxiter}; "
             + ("two searches: J, then the companion without the impact term (--no-companion skips it)" if two
                else "one search: J"))
-        search = SearchOptions(method=args.method, maxiter=maxiter, seed=args.seed, popsize=args.popsize,
-                               companion=args.companion)
+        search = SearchOptions(method=args.method, maxiter=maxiter, companion=args.companion, **de)
         result = optimize(problem, search, progress=None if args.quiet else err,
                           executor=SerialExecutor() if args.workers == 1 else None, workers=args.workers)
     if all(e["error"] for e in result.history):  # no optimum: the guess failed too

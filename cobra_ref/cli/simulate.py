@@ -37,7 +37,7 @@ def cmd_simulate(args) -> int:
     """``cobra-ref simulate``: simulate COBRA and the box; write the trajectory NPZ; print a
     one-line JSON summary. Every input is checked before the run; ``--params`` hands over to
     ``cmd_simulate_params``."""
-    if args.params:
+    if args.params is not None:
         return cmd_simulate_params(args)
     from ..reference import ReferenceError, builtin_reference, check_reference, load_reference
     from ..step import StepSettings
@@ -45,7 +45,7 @@ def cmd_simulate(args) -> int:
     # check every input before the (long) run, so that bad input writes nothing
     check_out(args.out)
     params = _gait_params(args.param)
-    if params and args.reference:
+    if params and args.reference is not None:
         raise fail("--param sets the parameters of a built-in gait (--gait); a --reference file has none")
     if args.box_offset is not None and args.box_gap is not None:
         raise fail("--box-gap places the box beside the middle link, --box-offset places it at an offset from "
@@ -58,9 +58,10 @@ def cmd_simulate(args) -> int:
         cobra = model_parameters(args)
     except ValueError as exc:  # ValidationError
         raise fail(exc) from None
-    source = args.reference or f"gait {args.gait}"
+    from_file = args.reference is not None
+    source = args.reference if from_file else f"gait {args.gait}"
     try:
-        reference = (load_reference(args.reference, cobra.q_max) if args.reference
+        reference = (load_reference(args.reference, cobra.q_max) if from_file
                      else builtin_reference(args.gait, params))
         warnings = check_reference(reference, duration, cobra.q_max, cobra.qd_max, source)
     except ReferenceError as exc:
@@ -74,8 +75,8 @@ def cmd_simulate(args) -> int:
                          box_yaw=args.box_yaw)
     q0, qd0 = _start(model, reference, settings, args, inputs)
     meta = {"options": _options(args, duration, settings), "cobra_parameters": dataclasses.asdict(cobra),
-            "reference": args.reference, "gait": None if args.reference else args.gait,
-            "gait_params": None if args.reference else gait_params(reference)}
+            "reference": args.reference, "gait": None if from_file else args.gait,
+            "gait_params": None if from_file else gait_params(reference)}
     run_and_write(Job(model, reference, duration, settings, q0, qd0, args.stepper, inputs), args.out,
                   f"simulate {source}", args.quiet, meta)
     return 0
