@@ -43,6 +43,8 @@ PARAMS_FILES = {
     "servo_kd_0": _cobra("servo_kd", 0),
     "box_quaternion_zero": _box_quaternion(0, 0, 0, 0),
     "box_quaternion_long": _box_quaternion(2, 0, 0, 0),
+    "huge_list": lambda r: r["settings"].__setitem__("box_pose0", list(range(100_000))),
+    "huge_string": _cobra("mu", "a" * 100_000),
 }
 
 
@@ -125,6 +127,9 @@ REFUSED = [
      ["box_pose0: the quaternion (qw, qx, qy, qz) = (0, 0, 0, 0) has norm 0", "allowed: a unit quaternion"]),
     ("json-long-quaternion", ["simulate", "--params", "{in}/box_quaternion_long.json"],
      ["box_pose0: the quaternion (qw, qx, qy, qz) = (2, 0, 0, 0) has norm 2"]),
+    ("json-huge-list", ["simulate", "--params", "{in}/huge_list.json"],
+     ["box_pose0: expected 7 finite numbers", "got [0, 1, 2, 3, 4, 5, ...]"]),
+    ("json-huge-string", ["simulate", "--params", "{in}/huge_string.json"], ["mu = 'aaaa", "...", "is not a number"]),
     ("json-nested-200000", ["simulate", "--params", "{in}/deep.json"], ["deep.json", "nested deeper than"]),
     # runs given to render and view
     ("render-unequal-contacts", ["render", "{in}/unequal.npz", "--out", "x.png"],
@@ -156,7 +161,7 @@ def test_refused_with_one_line_naming_the_input_and_nothing_written(case, here, 
         message = exc.code
     err = capsys.readouterr().err
     assert isinstance(message, str), f"{name}: exit status {message!r}, expected 1 with a message: {err}"
-    assert message.startswith("error:") and "\n" not in message, message
+    assert message.startswith("error:") and "\n" not in message and len(message) < 600, message
     for word in words:
         assert word in message, f"{name}: {word!r} not in {message!r}"
     assert "Traceback" not in err + message and "np.float64" not in message and "e+" not in message

@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..infra.output import atomic_write
+from ..infra.validation import value_text
 from ..provenance import code_version
 from ..gaits import gait
 from ..params import CobraParameters
@@ -110,7 +111,7 @@ def _read_fixed(d, parts) -> dict:
 
     fixed = d["fixed"]
     if not isinstance(fixed, dict) or not all(is_number(v) and np.isfinite(v) for v in fixed.values()):
-        raise ValueError(f"expected {{name: finite number}}, got {fixed!r}")
+        raise ValueError(f"expected {{name: finite number}}, got {value_text(fixed)}")
     return {"fixed": tuple(sorted((str(k), float(v)) for k, v in fixed.items()))}
 
 
@@ -119,7 +120,7 @@ def _read_weights(d, parts) -> dict:
 
     weights = d["weights"]
     if not isinstance(weights, dict):
-        raise ValueError(f"expected {{term: weight}}, got {weights!r}")
+        raise ValueError(f"expected {{term: weight}}, got {value_text(weights)}")
     for k, v in weights.items():
         RULES["weight"].check(v, f"weights.{k}")
     return {"weights": Weights(**weights)}
@@ -136,7 +137,7 @@ def _read_poses(d, parts) -> dict:
 def _read_cobra(d, parts) -> dict:
     cobra = d["cobra_parameters"]
     if not isinstance(cobra, dict):
-        raise ValueError(f"expected {{parameter: value}}, got {cobra!r}")
+        raise ValueError(f"expected {{parameter: value}}, got {value_text(cobra)}")
     return {"cobra": CobraParameters(**{str(k): tuple(v) if isinstance(v, list) else v for k, v in cobra.items()})}
 
 
@@ -174,10 +175,10 @@ def _floats(values, n: int | None = None, field: str = "values") -> tuple:
     from ..infra.validation import is_number
 
     if isinstance(values, (str, bytes, dict)) or not hasattr(values, "__iter__"):
-        raise ValueError(f"{field}: expected {n or 'some'} numbers, got {values!r}")
+        raise ValueError(f"{field}: expected {n or 'some'} numbers, got {value_text(values)}")
     values = list(values)
     if (n is not None and len(values) != n) or not all(is_number(v) and np.isfinite(v) for v in values):
-        raise ValueError(f"{field}: expected {n or 'some'} finite numbers, got {values!r}")
+        raise ValueError(f"{field}: expected {n or 'some'} finite numbers, got {value_text(values)}")
     return tuple(float(v) for v in values)
 
 
@@ -293,9 +294,10 @@ def load_result(path: str) -> dict:
         raise ShootingError(f"{path}: {exc}") from None
     params = record["params"]
     if not isinstance(params, dict) or not all(is_number(v) and np.isfinite(v) for v in params.values()):
-        raise ShootingError(f"{path}: malformed 'params': expected {{name: finite number}}, got {params!r}")
+        raise ShootingError(f"{path}: malformed 'params': expected {{name: finite number}}, "
+                            f"got {value_text(params)}")
     if not (is_number(record["cost"]) and np.isfinite(record["cost"])):
-        raise ShootingError(f"{path}: malformed 'cost': expected a finite number, got {record['cost']!r}")
+        raise ShootingError(f"{path}: malformed 'cost': expected a finite number, got {value_text(record['cost'])}")
     try:
         record["params"] = {str(k): float(v) for k, v in params.items()}
         gait(problem.gait, **record["params"])
@@ -313,7 +315,7 @@ def load_result(path: str) -> dict:
         if not isinstance(t, dict) or any(k not in t for k in TRANSFER_KEYS) or not all(
                 t[k] is None or (is_number(t[k]) and np.isfinite(t[k])) for k in TRANSFER_KEYS):
             raise ShootingError(f"{path}: malformed 'transfer': expected {{{', '.join(TRANSFER_KEYS)}}} "
-                                f"as finite numbers (or null where the check failed), got {t!r}")
+                                f"as finite numbers (or null where the check failed), got {value_text(t)}")
     if record.get("box_path") is not None:
         try:
             xy = np.asarray(record["box_path"]["xy"], dtype=float)
