@@ -91,6 +91,7 @@ REFUSED = [
     # an empty name is given: it is refused, never replaced by a default
     ("params-empty-name", ["simulate", "--params", "", "--out", "x.npz"], ["params file not found"]),
     ("reference-empty-name", ["simulate", "--reference", "", "--out", "x.npz"], ["reference file not found"]),
+    ("figures-empty-out", ["figures", "--quick", "--out", ""], ["cannot create output directory"]),
     # an option that does not apply to the rest of the command line: an error, not ignored
     ("pattern-seed", ["optimize", "--gait", "C", "--seed", "3", "--out", "o.json"],
      ["--seed: only --method de draws a population"]),
