@@ -245,3 +245,21 @@ def test_a_solver_failure_mid_run_names_the_inputs(here, capsys, monkeypatch, se
     code, said = run_main(["simulate", "--box-mass", "0.7", "--out", "run.npz", *TINY], capsys)
     assert code == 1 and "t = 0.0050 s: RuntimeError: OSQPException: 4 (with --dt 0.001" in said
     assert "--box-mass 0.7" in said
+
+
+def test_a_replay_at_another_dt_is_the_transfer_check(here, inputs, capsys):
+    """``simulate --params FILE --dt D`` settles the start and rolls out under D, as the transfer
+    check of a params JSON does (``planning.results.transfer``): the same box distance to the goal
+    and impact impulse, bit for bit."""
+    from cobra_ref.planning.results import decision_vector, load_result, transfer
+
+    record = load_result(str(inputs / "good.json"))
+    problem = record["problem"]
+    check = transfer(problem, decision_vector(problem, record["params"]), check_dt=0.0005)
+    code, said = run_main(["simulate", "--params", str(inputs / "good.json"), "--dt", "0.0005", "--out", "p.npz",
+                           "--quiet"], capsys)
+    assert code == 0, said
+    with np.load(here / "p.npz") as z:
+        distance = float(np.linalg.norm(z["box_pose"][-1, :2] - np.asarray(problem.goal_world)))
+        impulse = float(np.sum(z["impact_impulse"])) / problem.duration
+    assert (distance, impulse) == (check["check_distance_to_goal"], check["check_impact_impulse_per_s"])
