@@ -152,11 +152,11 @@ REFUSED = [
     ("duration-negative", ["simulate", "--duration=-1"], 2, "--duration = -1 s is out of range"),
     ("duration-nan", ["simulate", "--duration", "nan"], 2, "--duration = nan is not finite"),
     ("too-many-steps", ["simulate", "--duration", "2000"], 1, f"at most {MAX_STEPS} steps per run"),
-    ("too-many-steps-small-dt", ["simulate", "--duration", "20", "--dt", "1e-5"], 1, "is 2e+06 steps"),
+    ("too-many-steps-small-dt", ["simulate", "--duration", "20", "--dt", "1e-5"], 1, "is 2e6 steps"),
     ("dt-longer-than-duration", ["simulate", "--dt", "0.004", "--duration", "0.001"], 1,
      "--duration = 0.001 s is shorter than one step of --dt = 0.004 s"),
     ("duration-not-whole-steps", ["simulate", "--dt", "0.003", "--duration", "1"], 1,
-     "--duration = 1 s is not a whole number of steps of --dt = 0.003 s (333.3 steps): use --duration = 0.999 s or "
+     "--duration = 1 s is not a whole number of steps of --dt = 0.003 s (333.33 steps): use --duration = 0.999 s or "
      "1.002 s"),
     ("half-a-step", ["simulate", "--dt", "0.004", "--duration", "0.01"], 1, "(2.5 steps)"),
     # --- simulate: friction, box

@@ -7,6 +7,21 @@ traceback); every output by :func:`cobra_ref.infra.output.check_output` (exact n
 only, a real write probe). Progress and summaries go to stderr, stdout carries one JSON line;
 files are written atomically. A run that fails part-way keeps what was computed in
 ``OUT.failed.npz`` (``OUT`` without its extension), named in the error message.
+
+One rule for explicit options: an option given on the command line is never ignored. Where it
+conflicts with a file the command reads, it either wins and is recorded in the run's meta
+(``options``; ``simulate --params``: ``--duration``, ``--dt``, ``--contact``, ``--servo``, listed
+in ``options.overrides``), or it is an error (``simulate --params`` with an option that changes the
+model or the start: ``simulate.MODEL_OPTIONS``). An option that does not apply to the rest of the
+command line is an error too (``optimize --seed`` or ``--popsize`` without ``--method de``,
+``render --fps`` or ``--speed`` for a PNG still). "Given" means not None (``--mu 0`` and
+``--params ''`` are given): such options default to None and the command fills in its default. Every horizon goes through
+``validation.step_count`` (at least one step, at most ``MAX_STEPS``, a whole number of steps where
+the runs are compared or replayed). A command whose every rollout failed exits non-zero and writes
+no optimum. Files given to a command (params JSON, run NPZ) are checked by the rules of the command
+line (``validation.RULES``, ``PARAMETER_RULES``, ``check_pose``; ``viz.run_checks``), and a
+message names the field, the value and what is allowed, with numbers as a person writes them
+(``validation.number_text``); a solver failure names the inputs of the run (``inputs_text``).
 """
 
 from __future__ import annotations
@@ -131,6 +146,7 @@ class Job:
     q0: object = None
     qd0: object = None
     stepper: str = "fast"
+    inputs: str = ""  # the inputs a failure of the step is named with (``inputs_text``)
 
 
 def run_and_write(job: Job, out: str, label: str, quiet: bool = False, meta=None, summary=None):
@@ -161,7 +177,9 @@ def run_and_write(job: Job, out: str, label: str, quiet: bool = False, meta=None
         exc.trajectory.meta.update(meta or {})
         where = _keep_partial(exc.trajectory, out)
         print(json.dumps(exc.trajectory.summary()))
-        raise fail(f"{exc}\n{where}") from None
+        raise fail(f"{exc} ({job.inputs})\n{where}" if job.inputs else f"{exc}\n{where}") from None
+    except ValueError as exc:  # an input the model refuses (a ModelError, a ValidationError): nothing computed
+        raise fail(exc) from None
     except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM (signals.stop_signals)
         traj = getattr(exc, "trajectory", None)
         if traj is None:
@@ -227,6 +245,19 @@ def add_model_options(p) -> None:
                    help="friction coefficient of box-ground contacts (default: the same as --mu; A13)")
     p.add_argument("--box-mass", type=RULES["box_mass"].arg("--box-mass"), default=None,
                    help="mass of the box [kg] (default 0.5)")
+
+
+def inputs_text(settings, cobra, **more) -> str:
+    """The inputs a run's solves depend on, as options with their values ("with --dt 0.001,
+    --contact compliant, ..., --box-mass 0.5"): what the message of a solver failure names.
+    ``settings``: the ``StepSettings``; ``cobra``: the ``CobraParameters``; ``more``: other options
+    by name (``box_gap=0.05`` is written ``--box-gap 0.05``; None is left out)."""
+    from ..infra.validation import is_number, number_text
+
+    values = {"dt": settings.dt, "contact": settings.contact, "servo": settings.servo,
+              **{name: getattr(cobra, name) for name in MODEL_PARAMETERS}, **more}
+    return "with " + ", ".join(f"--{name.replace('_', '-')} {number_text(v) if is_number(v) else v}"
+                               for name, v in values.items() if v is not None)
 
 
 def model_parameters(args):

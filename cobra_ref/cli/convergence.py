@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 import sys
 
-from ..infra.validation import RULES, ValidationError, check_choice
+from ..infra.validation import RULES, ValidationError, check_choice, step_count
 from .common import c_stdout_silenced, check_out, fail, write_text_atomic
 
 
@@ -21,6 +21,8 @@ def cmd_convergence(args) -> int:
     try:
         for name in settings:
             check_choice("--settings", name, SETTINGS)
+        for dt in DTS:  # every run of the study covers the same time: whole steps of each dt
+            step_count(args.duration, dt, exact=True, duration_field="--duration", dt_field="dt")
         check_restart(args.restart, args.duration, DTS)
     except ValidationError as exc:
         raise fail(exc) from None

@@ -30,7 +30,7 @@ def cmd_figures(args) -> int:
         sys.stderr.write("error: --check compares a full run with the committed full results; a --quick run is a "
                          "smoke run and cannot be compared (drop --quick, or --check)\n")
         raise SystemExit(2)
-    out = args.out or (QUICK_OUT if args.quick else FULL_OUT)
+    out = (QUICK_OUT if args.quick else FULL_OUT) if args.out is None else args.out
     committed = _committed_claims(out) if args.check else None
     try:
         check_output_dir(out)

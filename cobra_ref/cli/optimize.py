@@ -8,8 +8,6 @@ from __future__ import annotations
 import json
 import sys
 
-import numpy as np
-
 from ..infra.executors import SerialExecutor
 from ..planning.problem import DECISION, DEFAULTS, RAMP_TIME, DecisionSpace, ShootingError, Weights, make_problem
 from ..infra.output import OutputError
@@ -17,8 +15,11 @@ from ..planning.checkpoint import Checkpoint
 from ..planning.results import summary_lines
 from ..planning.search import SearchOptions, optimize
 from ..step import StepSettings
-from ..infra.validation import DEFAULT_DT, RULES, ValidationError
-from .common import add_model_options, c_stdout_silenced, check_writable, fail, model_parameters, say_interrupted
+from ..infra.validation import DEFAULT_DT, RULES, ValidationError, number_text, step_count
+from .common import (add_model_options, c_stdout_silenced, check_writable, fail, inputs_text, model_parameters,
+                     say_interrupted)
+
+DE_DEFAULTS = {"seed": 0, "popsize": 2}  # --method de's options unless given
 
 
 def _assignments(items, n_values: int, what: str) -> dict:
@@ -35,6 +36,47 @@ def _assignments(items, n_values: int, what: str) -> dict:
             raise ShootingError(f"{what} must look like {form}, got {item!r}")
         out[name.strip()] = values if n_values == 2 else values[0]
     return out
+
+
+def _problem(args, goal, duration: float):
+    """The shooting problem of the options, checked (the horizon by ``validation.step_count``), or
+    exit with the message; a failure of the box placement's settling names the inputs."""
+    try:
+        step_count(duration, args.dt, exact=True, duration_field="--duration", dt_field="--dt")
+        space = DecisionSpace(bounds=_assignments(args.bound, 2, "--bound"),
+                              x0=_assignments(args.start, 1, "--start"), ramp_time=args.ramp_time)
+        settings = StepSettings(dt=args.dt, contact=args.contact, servo=args.servo)
+        cobra = model_parameters(args)
+        return make_problem(args.gait, goal, duration, settings, space, box_gap=args.box_gap, cobra=cobra)
+    except (ShootingError, ValidationError) as exc:
+        raise fail(exc) from None
+    except Exception as exc:  # noqa: BLE001 -- the box placement settles the start: any solver can fail
+        raise fail(f"the box could not be placed: {type(exc).__name__}: {exc} "
+                   f"({inputs_text(settings, cobra, box_gap=args.box_gap)})") from None
+
+
+def _de_options(args) -> dict:
+    """--seed and --popsize (``DE_DEFAULTS`` where not given); an error with --method pattern, which
+    has neither."""
+    given = {name: getattr(args, name) for name in DE_DEFAULTS if getattr(args, name) is not None}
+    if given and args.method != "de":
+        raise fail(f"{', '.join('--' + name for name in given)}: only --method de draws a population; "
+                   f"--method {args.method} has none (drop it, or add --method de)")
+    return {**DE_DEFAULTS, **given}
+
+
+def _xy(values) -> str:
+    """Two numbers as a person writes them, to 0.1 mm: "(0.1, -0.05)"."""
+    return "(" + ", ".join(number_text(round(float(v), 4)) for v in values) + ")"
+
+
+def _all_failed(result, args) -> str:
+    """The message of an optimization whose every rollout failed: how many, the first error, the
+    inputs, and that nothing was written."""
+    first = result.history[0]["error"]
+    inputs = inputs_text(result.problem.settings, result.problem.cobra, box_gap=args.box_gap)
+    return (f"every rollout failed (rollouts: {len(result.history)}); the first: {first} ({inputs}); nothing was "
+            f"written to {args.out}")
 
 
 def add_parsers(sub) -> None:
@@ -80,9 +122,10 @@ def add_parsers(sub) -> None:
                    help="iterations: polls of the compass search, generations of DE (default 6)")
     p.add_argument("--method", choices=("pattern", "de"), default="pattern",
                    help="parallel compass search (default) or scipy differential evolution")
-    p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=0, help="random seed of --method de (default 0)")
-    p.add_argument("--popsize", type=RULES["popsize"].arg("--popsize"), default=2,
-                   help="--method de: population = max(5, POPSIZE x parameters) (default 2)")
+    p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=None,
+                   help=f"random seed of --method de (default {DE_DEFAULTS['seed']})")
+    p.add_argument("--popsize", type=RULES["popsize"].arg("--popsize"), default=None,
+                   help=f"--method de: population = max(5, POPSIZE x parameters) (default {DE_DEFAULTS['popsize']})")
     p.add_argument("--bound", action="append", default=[], metavar="NAME=LO,HI",
                    help="bounds of a gait parameter (repeatable; adds it to the decision vector)")
     p.add_argument("--start", action="append", default=[], metavar="NAME=VALUE",
@@ -103,9 +146,11 @@ def cmd_optimize(args) -> int:
 
     ``cobra-ref optimize``. Exit status 0, or 130 after Ctrl-C and 143 after SIGTERM (the file is
     still written, with the best rollout so far); 1 with one line naming the file and where the
-    result is when the final write fails.
+    result is when the final write fails. When every rollout failed nothing is written and the
+    status is 1 (130 or 143 after an interrupt).
     """
     check_writable(args.out)
+    de = _de_options(args)
     if args.workers is not None and args.workers < 1:
         raise SystemExit(f"error: --workers must be >= 1, got {args.workers}")
     d_goal, d_duration, d_maxiter = DEFAULTS[args.gait]
@@ -114,25 +159,22 @@ def cmd_optimize(args) -> int:
     maxiter = d_maxiter if args.maxiter is None else args.maxiter
     err = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
     with c_stdout_silenced():  # OSQP's "Polishing not needed" lines (workers: parallel.worker_init)
-        try:
-            space = DecisionSpace(bounds=_assignments(args.bound, 2, "--bound"),
-                                  x0=_assignments(args.start, 1, "--start"), ramp_time=args.ramp_time)
-            settings = StepSettings(dt=args.dt, contact=args.contact, servo=args.servo)
-            problem = make_problem(args.gait, goal, duration, settings, space, box_gap=args.box_gap,
-                                   cobra=model_parameters(args))
-        except (ShootingError, ValidationError) as exc:
-            raise SystemExit(f"error: {exc}") from None
+        problem = _problem(args, goal, duration)
         two = args.companion and problem.weights.impact > 0
-        err(f"optimize {args.gait}: goal {goal} m from the box's start {np.round(problem.box_pose0[:2], 4)}, "
-            f"{len(problem.names)} parameters ({', '.join(problem.names)}), {duration} s rollouts, maxiter {maxiter}; "
+        err(f"optimize {args.gait}: goal {_xy(goal)} m from the box's start {_xy(problem.box_pose0[:2])} m, "
+            f"{len(problem.names)} parameters ({', '.join(problem.names)}), {number_text(duration)} s rollouts, "
+            f"maxiter {maxiter}; "
             + ("two searches: J, then the companion without the impact term (--no-companion skips it)" if two
                else "one search: J"))
-        search = SearchOptions(method=args.method, maxiter=maxiter, seed=args.seed, popsize=args.popsize,
-                               companion=args.companion)
+        search = SearchOptions(method=args.method, maxiter=maxiter, companion=args.companion, **de)
         keeper = Checkpoint(args.out, err)
         result = optimize(problem, search, progress=None if args.quiet else err,
                           executor=SerialExecutor() if args.workers == 1 else None, workers=args.workers,
                           checkpoint=keeper)
+    if all(e["error"] for e in result.history):  # no optimum: the guess failed too (no checkpoint was written)
+        if not result.interrupted:
+            raise fail(_all_failed(result, args))
+        return say_interrupted(None, _all_failed(result, args))
     for line in summary_lines(result):
         err(line)
     try:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 import time
 
-from ..infra.validation import RULES, ValidationError, check_choice
+from ..infra.validation import RULES, ValidationError, check_choice, step_count
 from .common import c_stdout_silenced, check_out, fail, write_text_atomic
 
 
@@ -25,9 +25,12 @@ def cmd_sweep(args) -> int:
     try:
         for law in laws:
             check_choice("--contact", law, LAWS)
+        todo = scenarios(args.n, args.seed, laws)
+        for s in todo:  # each scenario's horizon on its own dt: at least one step
+            step_count(args.duration, s.dt, exact=False, duration_field="--duration",
+                       dt_field=f"scenario {s.index}'s dt")
     except ValidationError as exc:
         raise fail(exc) from None
-    todo = scenarios(args.n, args.seed, laws)
     start, records = time.perf_counter(), []
     # own_pool: on Ctrl-C or SIGTERM the workers end at once
     with c_stdout_silenced(), own_pool(args.jobs) as pool:

@@ -13,7 +13,9 @@ import sys
 
 from ..infra.output import OutputError
 from ..infra.validation import RULES
-from .common import check_out
+from .common import check_out, fail
+
+RENDER_FPS = 30.0  # [1/s] a video's frame rate unless --fps is given
 
 
 def read_run(path: str):
@@ -62,13 +64,18 @@ def cmd_render(args) -> int:
     from ..viz.render import RenderError, VideoSettings, output_format, render_file
 
     try:
-        output_format(args.out)
+        still = output_format(args.out) == "png"
     except RenderError as exc:
         raise SystemExit(f"error: {exc}") from None
+    given = [option for option, value in (("--fps", args.fps), ("--speed", args.speed)) if value is not None]
+    if still and given:
+        raise fail(f"{' and '.join(given)} set{'s' if len(given) == 1 else ''} a video's frames; a .png still is "
+                   "one frame: drop it, or write a .gif or .mp4")
     check_out(args.out, "--out")
     traj = read_run(args.run)
     try:
-        video = VideoSettings(fps=args.fps, width=args.width, height=args.height, speed=args.speed,
+        video = VideoSettings(fps=RENDER_FPS if args.fps is None else args.fps, width=args.width,
+                              height=args.height, speed=1.0 if args.speed is None else args.speed,
                               force_scale=args.force_scale)
         info = render_file(traj, args.out, video, at=args.at, renderer=args.renderer,
                            progress=None if args.quiet else progress_printer(f"render {args.out}"))
@@ -115,9 +122,10 @@ def add_parsers(sub) -> None:
     r.add_argument("--out", required=True, metavar="FILE", help="FILE.mp4, FILE.gif, or FILE.png (a still)")
     r.add_argument("--at", type=RULES["at"].arg("--at"), default=None,
                    help="time of the still [s] from the run's start (PNG only; default: the last state)")
-    r.add_argument("--fps", type=RULES["fps"].arg("--fps"), default=30.0, help="video frames per second (default 30)")
-    r.add_argument("--speed", type=RULES["speed"].arg("--speed"), default=1.0,
-                   help="simulated seconds per video second (default 1; 0.25 = slow motion)")
+    r.add_argument("--fps", type=RULES["fps"].arg("--fps"), default=None,
+                   help=f"video frames per second (default {RENDER_FPS:g}; GIF and MP4 only)")
+    r.add_argument("--speed", type=RULES["speed"].arg("--speed"), default=None,
+                   help="simulated seconds per video second (default 1; 0.25 = slow motion; GIF and MP4 only)")
     r.add_argument("--width", type=RULES["width"].arg("--width"), default=640, help="image width [px] (default 640)")
     r.add_argument("--height", type=RULES["height"].arg("--height"), default=480, help="image height [px] (default 480)")
     r.add_argument("--force-scale", type=RULES["force_scale"].arg("--force-scale"), default=FORCE_SCALE,

@@ -13,6 +13,7 @@ import argparse
 import math
 import numbers
 import re
+import reprlib
 from dataclasses import dataclass
 
 
@@ -36,6 +37,24 @@ def number_text(x) -> str:
     return repr(x)
 
 
+class _Shown(reprlib.Repr):
+    """``reprlib``'s shortened repr with numbers as ``number_text`` writes them."""
+
+    def repr1(self, x, level):
+        return number_text(x) if is_number(x) else super().repr1(x, level)
+
+
+_SHOWN = _Shown()
+_SHOWN.maxlevel, _SHOWN.maxtuple, _SHOWN.maxlist, _SHOWN.maxdict, _SHOWN.maxstring, _SHOWN.maxother = 3, 6, 6, 6, 40, 40
+
+
+def value_text(value) -> str:
+    """A value as a message shows it: a repr cut to a line (at most six items per level, three
+    levels, 40 characters of a string), numbers as ``number_text`` writes them (1e308, not
+    np.float64(1e+308)); a 10 MB string or a list nested 200,000 deep stays one short line."""
+    return _SHOWN.repr(value)
+
+
 def is_number(value) -> bool:
     """True for a real number (Python's or numpy's), False for a bool, a string, None, a list."""
     return isinstance(value, numbers.Real) and not isinstance(value, bool) and type(value).__name__ != "bool_"
@@ -53,7 +72,7 @@ def check_choice(field: str, value, choices) -> str:
     """``value`` if it is one of ``choices`` (a contact law, a servo, a stepper, a gait), else a
     ``ValidationError`` listing them."""
     if not isinstance(value, str) or value not in choices:
-        raise ValidationError(f"{field} must be one of {', '.join(map(str, choices))}; got {field} = {value!r}")
+        raise ValidationError(f"{field} must be one of {', '.join(map(str, choices))}; got {field} = {value_text(value)}")
     return value
 
 
@@ -118,7 +137,7 @@ class Rule:
         rule's name), the value, the allowed range and the unit."""
         field = field or self.name
         if not is_number(value):
-            raise ValidationError(f"{field} = {value!r} is not a number ({self.allowed()})")
+            raise ValidationError(f"{field} = {value_text(value)} is not a number ({self.allowed()})")
         if self.kind == "int":
             if not isinstance(value, numbers.Integral):
                 if not (math.isfinite(value) and float(value).is_integer()):
@@ -143,7 +162,7 @@ class Rule:
         try:
             value = int(text) if self.kind == "int" else float(text)
         except (TypeError, ValueError):
-            raise ValidationError(f"{field} = {text!r} is not {'an integer' if self.kind == 'int' else 'a number'} "
+            raise ValidationError(f"{field} = {value_text(text)} is not {'an integer' if self.kind == 'int' else 'a number'} "
                                   f"({self.allowed()})") from None
         return self.check(value, field)
 
@@ -168,7 +187,7 @@ class PairRule:
         field = field or self.name
         parts = str(text).split(",")
         if len(parts) != 2:
-            raise ValidationError(f"{field} = {text!r}: expected {','.join(self.labels)}, two numbers "
+            raise ValidationError(f"{field} = {value_text(text)}: expected {','.join(self.labels)}, two numbers "
                                   f"({self.element.allowed()} each)")
         return tuple(self.element.parse(p.strip(), f"{field} {label}") for p, label in zip(parts, self.labels))
 
@@ -177,7 +196,7 @@ class PairRule:
         field = field or self.name
         items = as_list(values)
         if items is None or len(items) != 2:
-            raise ValidationError(f"{field} = {values!r}: expected two numbers ({self.element.allowed()} each)")
+            raise ValidationError(f"{field} = {value_text(values)}: expected two numbers ({self.element.allowed()} each)")
         return tuple(self.element.check(v, f"{field} {label}") for v, label in zip(items, self.labels))
 
     def range_text(self) -> str:

@@ -29,12 +29,12 @@ from __future__ import annotations
 
 import math
 
-from .rule import PairRule, Rule, ValidationError, as_list, check_choice, is_number, number_text
+from .rule import PairRule, Rule, ValidationError, as_list, check_choice, is_number, number_text, value_text
 
 __all__ = ["BYTES_PER_STEP", "DEFAULT_DT", "DT_MAX", "DT_MIN", "DT_WHY", "INERTIA_RULE", "MAX_STEPS", "MODEL_NUMBERS",
            "OPTIONAL_PARAMETERS", "PARAMETER_RULES", "RULES", "STEPS_WHY", "PairRule", "Rule", "ValidationError",
-           "check", "check_choice", "check_inertia", "check_parameters", "is_number", "number_text", "rule",
-           "step_count", "time_grid"]
+           "check", "check_choice", "check_inertia", "check_parameters", "check_pose", "is_number", "number_text", "rule",
+           "step_count", "time_grid", "value_text"]
 
 # ----------------------------------------------------------------------------------------- time grid
 DEFAULT_DT = 1e-3  # [s] the time step of every run unless one is given (docs/assumptions.md A14)
@@ -173,10 +173,10 @@ def check_inertia(field: str, value) -> tuple:
     """Three principal moments (Ixx, Iyy, Izz) [kg m^2], each > 0, and each at most the sum of the
     other two (a rigid body's triangle inequality); a ``ValidationError`` otherwise."""
     if isinstance(value, (str, bytes)):
-        raise ValidationError(f"{field} = {value!r}: expected three numbers (Ixx, Iyy, Izz) in kg m^2")
+        raise ValidationError(f"{field} = {value_text(value)}: expected three numbers (Ixx, Iyy, Izz) in kg m^2")
     items = as_list(value)
     if items is None or len(items) != 3:
-        raise ValidationError(f"{field} = {value!r}: expected three numbers (Ixx, Iyy, Izz) in kg m^2")
+        raise ValidationError(f"{field} = {value_text(value)}: expected three numbers (Ixx, Iyy, Izz) in kg m^2")
     moments = [INERTIA_RULE.check(v, f"{field}[{i}]") for i, v in enumerate(items)]
     for i in range(3):
         others = sum(moments) - moments[i]
@@ -185,6 +185,21 @@ def check_inertia(field: str, value) -> tuple:
                                   f"{field}[{i}] = {number_text(moments[i])} exceeds the sum of the other two, "
                                   f"{number_text(others)} (no rigid body has these principal moments)")
     return tuple(moments)
+
+
+def check_pose(field: str, value) -> tuple:
+    """A free body's pose (x, y, z, qw, qx, qy, qz): seven finite numbers [m, -] whose quaternion
+    has unit norm (within 1e-6, the tolerance of ``Model.check_q``); a ``ValidationError`` naming
+    ``field`` otherwise."""
+    items = None if isinstance(value, (str, bytes)) else as_list(value)
+    if items is None or len(items) != 7 or not all(is_number(v) and math.isfinite(v) for v in items):
+        raise ValidationError(f"{field}: expected 7 finite numbers (x, y, z in m; qw, qx, qy, qz, a unit "
+                              f"quaternion), got {value_text(value)}")
+    norm = math.sqrt(sum(float(v) ** 2 for v in items[3:]))
+    if abs(norm - 1.0) > 1e-6:
+        raise ValidationError(f"{field}: the quaternion (qw, qx, qy, qz) = ({', '.join(number_text(float(v)) for v in items[3:])}) "
+                              f"has norm {number_text(norm)} (allowed: a unit quaternion, norm 1 within 1e-6)")
+    return tuple(float(v) for v in items)
 
 
 def time_grid(duration, dt, exact: bool = True, duration_field: str = "duration", dt_field: str = "dt") -> int:
@@ -204,14 +219,14 @@ def step_count(duration, dt: float, exact: bool = True, duration_field: str = "d
     """
     g = number_text
     if not is_number(duration):
-        raise ValidationError(f"{duration_field} = {duration!r} is not a number (allowed: > 0 s)")
+        raise ValidationError(f"{duration_field} = {value_text(duration)} is not a number (allowed: > 0 s)")
     duration = float(duration)
     if not (math.isfinite(duration) and duration > 0):
         raise ValidationError(f"{duration_field} = {g(duration)} s: must be positive and finite (allowed: > 0 s)")
     steps = duration / dt
     n = round(steps)
     if steps > MAX_STEPS + 0.5:
-        raise ValidationError(f"{duration_field} = {g(duration)} s at {dt_field} = {g(dt)} s is {steps:.4g} steps: "
+        raise ValidationError(f"{duration_field} = {g(duration)} s at {dt_field} = {g(dt)} s is {g(steps)} steps: "
                               f"at most {MAX_STEPS} steps per run ({STEPS_WHY}); shorten {duration_field} "
                               f"or lengthen {dt_field}")
     if n < 1:
@@ -221,6 +236,6 @@ def step_count(duration, dt: float, exact: bool = True, duration_field: str = "d
         lo, hi = math.floor(steps) * dt, math.ceil(steps) * dt
         options = " or ".join(f"{g(round(v, 12))} s" for v in (lo, hi) if v > 0)
         raise ValidationError(f"{duration_field} = {g(duration)} s is not a whole number of steps of {dt_field} = "
-                              f"{g(dt)} s ({steps:.4g} steps): use {duration_field} = {options}, or another "
+                              f"{g(dt)} s ({g(round(steps, 2))} steps): use {duration_field} = {options}, or another "
                               f"{dt_field}")
     return int(n)

@@ -2,7 +2,7 @@
 
 ``Checkpoint(path)`` is what ``search.optimize`` takes as ``checkpoint``: after every batch of
 rollouts it writes every rollout so far and the best of them to ``path`` (atomically, marked
-``"checkpoint": true``). A checkpoint that cannot be written (a full disk) is said once and the
+``"checkpoint": true``; nothing until a rollout has succeeded). A checkpoint that cannot be written (a full disk) is said once and the
 search goes on; the next batch tries again. ``Checkpoint.final`` writes the finished result to
 ``path``; when that fails, to a fallback file in the system's temporary directory, and the
 ``OutputError`` it raises says, in one line, why and where the result is.
@@ -36,7 +36,10 @@ class Checkpoint:
         self.kept, self.failing, self.kept_in = 0, False, None
 
     def __call__(self, result) -> None:
-        """Write the rollouts so far (a ``ShootingResult`` with ``checkpoint`` true) to ``path``."""
+        """Write the rollouts so far (a ``ShootingResult`` with ``checkpoint`` true) to ``path``;
+        nothing while every rollout so far has failed (a failed guess is no optimum to keep)."""
+        if all(e.get("error") for e in result.history):
+            return
         try:
             write_result(result, self.path)
         except OutputError as exc:

@@ -9,12 +9,14 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import sys
 from dataclasses import asdict
 from typing import NamedTuple
 
 import numpy as np
 
 from ..infra.output import atomic_write
+from ..infra.validation import value_text
 from ..provenance import code_version
 from ..gaits import gait
 from ..params import CobraParameters
@@ -109,7 +111,7 @@ def _read_fixed(d, parts) -> dict:
 
     fixed = d["fixed"]
     if not isinstance(fixed, dict) or not all(is_number(v) and np.isfinite(v) for v in fixed.values()):
-        raise ValueError(f"expected {{name: finite number}}, got {fixed!r}")
+        raise ValueError(f"expected {{name: finite number}}, got {value_text(fixed)}")
     return {"fixed": tuple(sorted((str(k), float(v)) for k, v in fixed.items()))}
 
 
@@ -118,22 +120,24 @@ def _read_weights(d, parts) -> dict:
 
     weights = d["weights"]
     if not isinstance(weights, dict):
-        raise ValueError(f"expected {{term: weight}}, got {weights!r}")
+        raise ValueError(f"expected {{term: weight}}, got {value_text(weights)}")
     for k, v in weights.items():
         RULES["weight"].check(v, f"weights.{k}")
     return {"weights": Weights(**weights)}
 
 
 def _read_poses(d, parts) -> dict:
+    from ..infra.validation import check_pose
+
     direction = None if d["box_direction"] is None else _floats(d["box_direction"], 2, "box_direction")
-    return {"box_pose0": _floats(d["box_pose0"], 7, "box_pose0"),
+    return {"box_pose0": check_pose("box_pose0", d["box_pose0"]),
             "middle_pose0": _floats(d["middle_pose0"], 3, "middle_pose0"), "box_direction": direction}
 
 
 def _read_cobra(d, parts) -> dict:
     cobra = d["cobra_parameters"]
     if not isinstance(cobra, dict):
-        raise ValueError(f"expected {{parameter: value}}, got {cobra!r}")
+        raise ValueError(f"expected {{parameter: value}}, got {value_text(cobra)}")
     return {"cobra": CobraParameters(**{str(k): tuple(v) if isinstance(v, list) else v for k, v in cobra.items()})}
 
 
@@ -171,10 +175,10 @@ def _floats(values, n: int | None = None, field: str = "values") -> tuple:
     from ..infra.validation import is_number
 
     if isinstance(values, (str, bytes, dict)) or not hasattr(values, "__iter__"):
-        raise ValueError(f"{field}: expected {n or 'some'} numbers, got {values!r}")
+        raise ValueError(f"{field}: expected {n or 'some'} numbers, got {value_text(values)}")
     values = list(values)
     if (n is not None and len(values) != n) or not all(is_number(v) and np.isfinite(v) for v in values):
-        raise ValueError(f"{field}: expected {n or 'some'} finite numbers, got {values!r}")
+        raise ValueError(f"{field}: expected {n or 'some'} finite numbers, got {value_text(values)}")
     return tuple(float(v) for v in values)
 
 
@@ -278,6 +282,9 @@ def load_result(path: str) -> dict:
             record = json.load(f)
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ShootingError(f"{path}: not a readable JSON file ({exc})") from None
+    except RecursionError:  # json's decoder recurses once per level of nesting
+        raise ShootingError(f"{path}: not a params file of cobra-ref optimize: nested deeper than "
+                            f"{sys.getrecursionlimit()} levels") from None
     if not isinstance(record, dict) or record.get("format") != FORMAT:
         raise ShootingError(f"{path}: not a params file of cobra-ref optimize (expected format {FORMAT!r})")
     for key in ("params", "settings", "cost"):
@@ -289,9 +296,10 @@ def load_result(path: str) -> dict:
         raise ShootingError(f"{path}: {exc}") from None
     params = record["params"]
     if not isinstance(params, dict) or not all(is_number(v) and np.isfinite(v) for v in params.values()):
-        raise ShootingError(f"{path}: malformed 'params': expected {{name: finite number}}, got {params!r}")
+        raise ShootingError(f"{path}: malformed 'params': expected {{name: finite number}}, "
+                            f"got {value_text(params)}")
     if not (is_number(record["cost"]) and np.isfinite(record["cost"])):
-        raise ShootingError(f"{path}: malformed 'cost': expected a finite number, got {record['cost']!r}")
+        raise ShootingError(f"{path}: malformed 'cost': expected a finite number, got {value_text(record['cost'])}")
     try:
         record["params"] = {str(k): float(v) for k, v in params.items()}
         gait(problem.gait, **record["params"])
@@ -309,7 +317,7 @@ def load_result(path: str) -> dict:
         if not isinstance(t, dict) or any(k not in t for k in TRANSFER_KEYS) or not all(
                 t[k] is None or (is_number(t[k]) and np.isfinite(t[k])) for k in TRANSFER_KEYS):
             raise ShootingError(f"{path}: malformed 'transfer': expected {{{', '.join(TRANSFER_KEYS)}}} "
-                                f"as finite numbers (or null where the check failed), got {t!r}")
+                                f"as finite numbers (or null where the check failed), got {value_text(t)}")
     if record.get("box_path") is not None:
         try:
             xy = np.asarray(record["box_path"]["xy"], dtype=float)
@@ -384,26 +392,32 @@ class ParamsRun(NamedTuple):
     same_code: bool = True  # the physics modules' SHA-256 equals the one the optimum was found with
 
 
-def params_reference(path: str, duration: float | None = None) -> ParamsRun:
+def params_reference(path: str, duration: float | None = None, step: dict | None = None) -> ParamsRun:
     """Read a params JSON and return everything to replay its optimum with ``simulate``.
 
     For ``cobra-ref simulate --params``. ``duration`` None = the optimization's horizon (then
-    ``params_summary`` checks that the replayed cost equals the recorded one; else a whole number of
-    the optimization's steps). Raises ``ShootingError`` for a missing or malformed file or a bad
-    ``duration``.
+    ``params_summary`` checks that the replayed cost equals the recorded one); ``step``: the
+    ``StepSettings`` fields (dt, contact, servo) that replace the optimization's, with the start
+    settled under them, as the transfer check does. The horizon is a whole number of steps of the
+    replay's dt when either differs from the file's (``validation.step_count``). Raises
+    ``ShootingError`` for a missing or malformed file, a bad ``duration`` or step setting, or a
+    recorded start the model refuses.
     """
-    from ..infra.validation import ValidationError, time_grid
+    from ..infra.validation import ValidationError, step_count
+    from ..model import ModelError
 
     record = load_result(path)
     problem: ShootingProblem = record["problem"]
-    if duration is not None:
-        try:
-            time_grid(duration, problem.dt, exact=True)
-        except ValidationError as exc:
-            raise ShootingError(str(exc)) from None
-    x = decision_vector(problem, record["params"])
-    model = cobra_model(problem.cobra)
-    q0, qd0 = start_state(problem, x, model)
-    return ParamsRun(problem.gait, problem.reference(x), problem.settings,
-                     problem.duration if duration is None else float(duration), q0, qd0, model, problem,
+    try:
+        replayed = dataclasses.replace(problem, settings=dataclasses.replace(problem.settings, **(step or {})))
+        horizon = problem.duration if duration is None else float(duration)
+        # a new grid (another horizon or dt) is a whole number of steps; the file's own was checked on reading
+        step_count(horizon, replayed.dt, exact=duration is not None or replayed.dt != problem.dt,
+                   duration_field="--duration", dt_field="--dt" if "dt" in (step or {}) else "dt")
+        x = decision_vector(problem, record["params"])
+        model = cobra_model(problem.cobra)
+        q0, qd0 = start_state(replayed, x, model)
+    except (ValidationError, ModelError) as exc:
+        raise ShootingError(f"{path}: {exc}") from None
+    return ParamsRun(problem.gait, problem.reference(x), replayed.settings, horizon, q0, qd0, model, problem,
                      float(record["cost"]), record.get("code", {}).get("physics_sha256") == code_version(planning=True)["physics_sha256"])

@@ -24,9 +24,9 @@ import numpy as np
 from ..mjcf import to_mjcf
 from ..robots import cobra_model
 from ..trajectory import CONTACT_KEYS, Trajectory
+from .run_checks import KIND_NAMES, N_POSE, RunError, check_run
 
 FORCE_SCALE = 0.02  # arrow length per newton [m/N]: a link's share of the weight (~5 N) clears its radius
-KIND_NAMES = ("robot-ground", "robot-box", "box-ground")
 KIND_RGBA = np.array([[0.10, 0.65, 0.20, 1.0],   # robot-ground: green
                       [0.85, 0.10, 0.10, 1.0],   # robot-box: red
                       [0.15, 0.35, 0.90, 1.0]],  # box-ground: blue
@@ -39,53 +39,48 @@ BOX_RGBA = "0.88 0.63 0.25 0.6"
 ARROW_WIDTH, POINT_RADIUS = 0.008, 0.008  # [m]
 PATH_SEGMENTS = 200  # at most this many line segments for the box's path
 BODY_MARGIN = 0.09  # the largest body radius (0.057 m, the tail) or the box's half diagonal (0.087 m) [m]
-N_POSE = 25
-
-
-class RunError(ValueError):
-    """A file that is not a readable cobra-ref run (the message says why)."""
 
 
 def load_run(path: str) -> Trajectory:
     """Read a run written by ``cobra-ref simulate --out RUN.npz`` and check what the viewer needs.
 
     The viewer and the renderer. Raises RunError naming the problem: a missing file, a file that is
-    not an NPZ, a missing array, q of the wrong shape.
+    not an NPZ, a missing array, or an array the checks of :func:`run_checks.check_run` refuse.
     """
     if not os.path.isfile(path):
         raise RunError(f"no such run file: {path}")
     try:
         traj = Trajectory.from_npz(path)
-    except KeyError:  # a run of another version of the step records: read what a replay needs
+    except Exception:  # noqa: BLE001 -- another version's records, or not a run: read what a replay needs
         traj = replay_arrays(path)
-    except Exception as exc:  # numpy's errors for a non-NPZ file vary: ValueError, OSError, BadZipFile
-        raise RunError(f"{path} is not a readable NPZ run ({type(exc).__name__}: {exc})") from None
-    n = len(traj.t)
-    if n == 0:
-        raise RunError(f"{path} holds no state")
-    if traj.q.ndim != 2 or traj.q.shape != (n, N_POSE):
-        raise RunError(f"{path}: q has shape {traj.q.shape}, expected ({n}, {N_POSE}) (COBRA and the box)")
-    if not np.all(np.isfinite(traj.q)):
-        raise RunError(f"{path}: q holds non-finite values")
+    check_run(traj, path)
     return traj
 
 
 def replay_arrays(path: str) -> Trajectory:
     """A Trajectory holding only what a replay shows: t, q, box_pose and the contact log (qd and
-    tau when present); RunError naming the first missing array.
+    tau when present); RunError naming the first missing array, or a file numpy cannot read.
 
     :func:`load_run` for runs whose per-step records differ from this version's.
     """
-    with np.load(path, allow_pickle=False) as z:
-        for key in ("t", "q", "box_pose") + CONTACT_KEYS[:6]:
-            if key not in z.files:
-                raise RunError(f"{path} is not a cobra-ref run: it has no array {key!r}")
-        t = z["t"]
-        dt = float(z["dt"]) if "dt" in z.files else float(np.diff(t[:2])[0]) if len(t) > 1 else 0.0
-        qd = z["qd"] if "qd" in z.files else np.zeros((len(t), 0))
-        tau = z["tau"] if "tau" in z.files else np.zeros((max(len(t) - 1, 0), 0))
-        return Trajectory(dt, t, z["q"], qd, tau, z["box_pose"], {}, {k: z[k] for k in CONTACT_KEYS if k in z.files},
-                          error=str(z["error"]) if "error" in z.files else "")
+    try:
+        z = np.load(path, allow_pickle=False)
+        if not hasattr(z, "files"):  # a .npy file: one array
+            raise ValueError("one array, not an NPZ archive of arrays")
+        with z:
+            missing = [key for key in ("t", "q", "box_pose") + CONTACT_KEYS[:6] if key not in z.files]
+            arrays = {} if missing else {key: z[key] for key in z.files}
+    except Exception as exc:  # numpy's errors for a non-NPZ file vary: ValueError, OSError, BadZipFile
+        raise RunError(f"{path} is not a readable NPZ run ({type(exc).__name__}: {exc})") from None
+    if missing:
+        raise RunError(f"{path} is not a cobra-ref run: it has no array {missing[0]!r}")
+    t = arrays["t"]
+    n = len(t) if t.ndim == 1 else 0
+    dt = arrays.get("dt", np.array(0.0))
+    return Trajectory(float(dt) if dt.size == 1 and np.issubdtype(dt.dtype, np.number) else 0.0, t, arrays["q"], arrays.get("qd", np.zeros((n, 0))),
+                      arrays.get("tau", np.zeros((max(n - 1, 0), 0))), arrays["box_pose"], {},
+                      {k: arrays[k] for k in CONTACT_KEYS if k in arrays},
+                      error=str(arrays["error"]) if "error" in arrays else "")
 
 
 def scene_xml() -> str:
