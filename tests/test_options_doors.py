@@ -90,8 +90,8 @@ REFUSED = [
     ("params-param", ["simulate", "--params", "{in}/good.json", "--param", "amplitude=0.4"], ["--param cannot"]),
     # an empty name is given: it is refused, never replaced by a default
     ("params-empty-name", ["simulate", "--params", "", "--out", "x.npz"], ["params file not found"]),
-    ("reference-empty-name", ["simulate", "--reference", "", "--out", "x.npz"], ["reference file not found"]),
-    ("figures-empty-out", ["figures", "--quick", "--out", ""], ["cannot create output directory"]),
+    ("reference-empty-name", ["simulate", "--reference", "", "--out", "x.npz"], ["is not a file name"]),
+    ("figures-empty-out", ["figures", "--quick", "--out", ""], ["output directory is empty"]),
     # an option that does not apply to the rest of the command line: an error, not ignored
     ("pattern-seed", ["optimize", "--gait", "C", "--seed", "3", "--out", "o.json"],
      ["--seed: only --method de draws a population"]),
@@ -116,8 +116,8 @@ REFUSED = [
      ["--duration = 0.0001 s is shorter than one step of scenario 0's dt"]),
     # numbers as a person writes them
     ("goal-1e308", ["optimize", "--gait", "C", "--goal", "1e308,0", "--out", "o.json"],
-     ["goal (1e308, 0) m is unreachable: 1e308 m from the box's start"]),
-    ("goal-100", ["optimize", "--gait", "C", "--goal", "100,0", "--out", "o.json"], ["goal (100, 0) m is unreachable"]),
+     ["goal = (1e308, 0) m is unreachable: 1e308 m from the box's start"]),
+    ("goal-100", ["optimize", "--gait", "C", "--goal", "100,0", "--out", "o.json"], ["goal = (100, 0) m is unreachable"]),
     # params JSON: values the model refuses, refused at the door by their rule
     ("json-n-body-links", ["simulate", "--params", "{in}/n_body_links_50.json"],
      ["n_body_links = 50 is out of range", "allowed: an integer [10, 10]"]),

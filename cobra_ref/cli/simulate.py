@@ -39,6 +39,7 @@ def cmd_simulate(args) -> int:
     ``cmd_simulate_params``."""
     if args.params is not None:
         return cmd_simulate_params(args)
+    from ..infra.arguments import ArgumentTypeError
     from ..reference import ReferenceError, builtin_reference, check_reference, load_reference
     from ..step import StepSettings
 
@@ -64,7 +65,7 @@ def cmd_simulate(args) -> int:
         reference = (load_reference(args.reference, cobra.q_max) if from_file
                      else builtin_reference(args.gait, params))
         warnings = check_reference(reference, duration, cobra.q_max, cobra.qd_max, source)
-    except ReferenceError as exc:
+    except (ReferenceError, ArgumentTypeError) as exc:  # a bad file, or an empty --reference ''
         raise fail(exc) from None
     for line in warnings:
         print(f"warning: {line}", file=sys.stderr)
