@@ -117,7 +117,10 @@ def write_cli_doc(path: str = CLI_DOC) -> str:
 
 
 if __name__ == "__main__":  # python -m cobra_ref.cli.options_doc [docs/cli.md]
-    import sys
+    import argparse
 
-    for target in sys.argv[1:] or [CLI_DOC]:
+    cli = argparse.ArgumentParser(prog="python -m cobra_ref.cli.options_doc",
+                                  description="Write the option tables of every cobra-ref subcommand (docs/cli.md).")
+    cli.add_argument("targets", nargs="*", default=[CLI_DOC], metavar="FILE", help=f"where to write (default {CLI_DOC})")
+    for target in cli.parse_args().targets:
         print(f"wrote {write_cli_doc(target)}")
