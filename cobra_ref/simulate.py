@@ -199,7 +199,7 @@ class _Log:
             s[key][k] = getattr(res, key)
         self.tau[k] = res.tau
         # the contact log, and the impacts: contacts that start carrying load while approaching
-        active = np.flatnonzero(res.p[0::3] > 0.0)
+        active = (res.p[0::3] > 0.0).nonzero()[0]
         keys = cs.keys()
         active_keys = [keys[i] for i in active.tolist()]
         onset = np.array([key not in self.loaded for key in active_keys], dtype=bool)

@@ -81,7 +81,7 @@ class FastStepper:
         s, model, F, P = self.settings, self.model, self.free, self.prescribed
         dt, servo = s.dt, s.joint_servo
         clock = [time.perf_counter()]
-        tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
+        tau_ext = np.zeros(self.chain.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
         # Steps 1-3: eq. (1) with h at the midpoint velocity, the joints, qd_free over the free coordinates
         terms = self.chain.terms(q, midpoint_velocity(qd, self.memory))
         M, h = terms.M, terms.h
