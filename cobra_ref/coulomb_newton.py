@@ -185,7 +185,7 @@ class _NewtonSystem:
     def at(self, X, theta):
         """(K, F, r) at (X, theta) (``coulomb_newton``'s system)."""
         problem, m, n, K, K_flat, F, at = self.problem, self.m, self.n, self.K, self.K_flat, self.F, self.layout
-        N, T1, T2, D = at.N, at.T1, at.T2, at.D
+        N, T1, T2 = at.N, at.T1, at.T2
         p_N = np.maximum(X[0:3 * m:3], 0.0)
         R_T = stick_slip_compliance(problem.stiction_velocity, problem.mu * p_N, self.G_TT)
         K[:n, :n], K[:n, n:] = problem.H, 0.0
@@ -196,12 +196,12 @@ class _NewtonSystem:
         uncapped = (R_T < self.R_max) & (p_N > 0)
         dR = np.where(uncapped, R_T / np.where(uncapped, p_N, 1.0), 0.0)
         K_flat[at.dT_dN] -= np.concatenate([dR, dR]) * X[at.tangent]
-        # sliding contact i (row D): p_T = mu p_N e(theta) and e_perp . r_T = 0, d e_perp / d theta = -e
+        # sliding contact i (row D, the rows n: on): p_T = mu p_N e(theta) and e_perp . r_T = 0, d e_perp / d theta = -e
         mu, c, sn = problem.mu[at.S], np.cos(theta[at.S]), np.sin(theta[at.S])
-        K[D, :n] = c[:, None] * K[T2, :n] - sn[:, None] * K[T1, :n]
-        K[D, n:] = 0.0
+        K[n:, :n] = c[:, None] * K.take(T2, 0)[:, :n] - sn[:, None] * K.take(T1, 0)[:, :n]
+        K[n:, n:] = 0.0
         r_T1, r_T2, mu_p_N = r[T1], r[T2], mu * X[N]
-        F[D] = c * r_T2 - sn * r_T1
+        F[n:] = c * r_T2 - sn * r_T1
         # its tangent rows: the circle's conditions, in place of the law's rows
         K[at.T] = 0.0
         K_flat[at.circle] = np.concatenate([at.ones, -mu * c, -mu * sn, mu_p_N * sn, -mu_p_N * c,
