@@ -19,6 +19,7 @@ its guesses and the loop stops.
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import numpy as np
@@ -148,7 +149,7 @@ def coulomb_newton(problem, x: np.ndarray, rounds: int = 4, steps: int = 4):
             if np.abs(d).max() <= _SQRT_NEWTON_TOL * np.abs(X).max():
                 break
         corrected = _corrected(problem, X, theta, act, system.residual(X))
-        if all(np.array_equal(a, b) for a, b in zip(corrected, act)):
+        if (np.concatenate(corrected) == np.concatenate(act)).all():  # the same set: every mask equal
             p_N, p_T = np.maximum(X[0:3 * m:3], 0.0), X[:3 * m].reshape(m, 3)[:, 1:]
             return p_N, np.where(act.sliding, theta, np.arctan2(p_T[:, 1], p_T[:, 0])), X
         act = corrected
@@ -164,33 +165,15 @@ class _NewtonSystem:
 
     def __init__(self, problem, act: ActiveSet):
         m, n = problem.m, len(problem.c)
-        S = np.flatnonzero(act.sliding)
-        k = len(S)
-        size = n + k
-        self.problem, self.m, self.n, self.S = problem, m, n, S
-        N = 3 * S
-        self.N, self.T1, self.T2, self.D = N, N + 1, N + 2, np.arange(n, size)
-        self.T = np.concatenate([self.T1, self.T2])
-        pinned = np.zeros(n, dtype=bool)
-        pinned[:3 * m] = np.repeat(act.released, 3)
-        pinned[3 * m:] = act.at_lo | act.at_hi
-        self.pinned = np.flatnonzero(pinned)
+        pinned = np.concatenate([np.repeat(act.released, 3), act.at_lo | act.at_hi])
+        layout = _layout(m, n, act.sliding.tobytes(), pinned.tobytes())
+        self.problem, self.m, self.n, self.layout, self.S = problem, m, n, layout, layout.S
         target = np.zeros(n)
         target[3 * m:] = np.where(act.at_lo, problem.lo, problem.hi)
-        self.target = target[self.pinned]
+        self.target = target[layout.pinned]
         self.G_TT = _tangential_diagonal(problem.H, m)
         self.R_max = STICK_SLIP_MAX * self.G_TT
-        # positions in K.flat of every contact's tangential diagonal entries (3i+1, 3i+1), (3i+2, 3i+2),
-        # of their derivatives by p_N, (3i+1, 3i), (3i+2, 3i), and of the pinned rows' diagonal
-        tangent, normal = _tangent_rows(m)
-        self.tangent, self.diag_T, self.dT_dN = tangent, tangent * (size + 1), tangent * size + normal
-        self.diag_pinned = self.pinned * (size + 1)
-        # positions in K.flat of the circle's entries, in the order ``at`` lists their values:
-        # (T1, T1), (T2, T2), (T1, N), (T2, N), (T1, D), (T2, D), (D, D)
-        T1, T2, D = self.T1 * size, self.T2 * size, self.D * size
-        self.circle = np.concatenate([T1 + self.T1, T2 + self.T2, T1 + N, T2 + N, T1 + self.D, T2 + self.D,
-                                      D + self.D])
-        self.ones = np.ones(2 * k)
+        size = n + len(self.S)
         self.K = np.zeros((size, size))
         self.K_flat = self.K.reshape(-1)  # a view
         self.F = np.zeros(size)
@@ -201,40 +184,73 @@ class _NewtonSystem:
 
     def at(self, X, theta):
         """(K, F, r) at (X, theta) (``coulomb_newton``'s system)."""
-        problem, m, n, K, K_flat, F = self.problem, self.m, self.n, self.K, self.K_flat, self.F
-        N, T1, T2, D = self.N, self.T1, self.T2, self.D
+        problem, m, n, K, K_flat, F, at = self.problem, self.m, self.n, self.K, self.K_flat, self.F, self.layout
+        N, T1, T2 = at.N, at.T1, at.T2
         p_N = np.maximum(X[0:3 * m:3], 0.0)
         R_T = stick_slip_compliance(problem.stiction_velocity, problem.mu * p_N, self.G_TT)
         K[:n, :n], K[:n, n:] = problem.H, 0.0
-        K_flat[self.diag_T] += np.concatenate([R_T, R_T])
+        K_flat[at.diag_T] += np.concatenate([R_T, R_T])
         r = K[:n, :n] @ X + problem.c
         F[:n] = r
         # the stick-slip compliance R_T = v_s / (mu p_N) where it is not capped: d r_T / d p_N = -R_T p_T / p_N
         uncapped = (R_T < self.R_max) & (p_N > 0)
         dR = np.where(uncapped, R_T / np.where(uncapped, p_N, 1.0), 0.0)
-        K_flat[self.dT_dN] -= np.concatenate([dR, dR]) * X[self.tangent]
-        # sliding contact i (row D): p_T = mu p_N e(theta) and e_perp . r_T = 0, d e_perp / d theta = -e
-        mu, c, sn = problem.mu[self.S], np.cos(theta[self.S]), np.sin(theta[self.S])
-        K[D, :n] = c[:, None] * K[T2, :n] - sn[:, None] * K[T1, :n]
-        K[D, n:] = 0.0
+        K_flat[at.dT_dN] -= np.concatenate([dR, dR]) * X[at.tangent]
+        # sliding contact i (row D, the rows n: on): p_T = mu p_N e(theta) and e_perp . r_T = 0, d e_perp / d theta = -e
+        mu, c, sn = problem.mu[at.S], np.cos(theta[at.S]), np.sin(theta[at.S])
+        K[n:, :n] = c[:, None] * K.take(T2, 0)[:, :n] - sn[:, None] * K.take(T1, 0)[:, :n]
+        K[n:, n:] = 0.0
         r_T1, r_T2, mu_p_N = r[T1], r[T2], mu * X[N]
-        F[D] = c * r_T2 - sn * r_T1
+        F[n:] = c * r_T2 - sn * r_T1
         # its tangent rows: the circle's conditions, in place of the law's rows
-        K[self.T] = 0.0
-        K_flat[self.circle] = np.concatenate([self.ones, -mu * c, -mu * sn, mu_p_N * sn, -mu_p_N * c,
-                                              -(c * r_T1 + sn * r_T2)])
+        K[at.T] = 0.0
+        K_flat[at.circle] = np.concatenate([at.ones, -mu * c, -mu * sn, mu_p_N * sn, -mu_p_N * c,
+                                            -(c * r_T1 + sn * r_T2)])
         F[T1], F[T2] = X[T1] - mu_p_N * c, X[T2] - mu_p_N * sn
         # released contacts and saturated servo rows are pinned at their targets
-        K[self.pinned] = 0.0
-        K_flat[self.diag_pinned] = 1.0
-        F[self.pinned] = X[self.pinned] - self.target
+        K[at.pinned] = 0.0
+        K_flat[at.diag_pinned] = 1.0
+        F[at.pinned] = X[at.pinned] - self.target
         return K, F, r
 
 
-def _tangent_rows(m: int) -> tuple[np.ndarray, np.ndarray]:
-    """(tangent, normal): the rows 3i+1 then 3i+2 of the m contacts, and each one's normal row 3i."""
+class _Layout(NamedTuple):
+    """Where ``_NewtonSystem``'s rows and entries sit for one active set (``_layout``)."""
+
+    S: np.ndarray  # the sliding contacts
+    N: np.ndarray  # their normal rows 3i
+    T1: np.ndarray  # their first tangent rows 3i+1
+    T2: np.ndarray  # their second tangent rows 3i+2
+    D: np.ndarray  # their angle rows n, n+1, ...
+    T: np.ndarray  # T1 then T2
+    pinned: np.ndarray  # the pinned rows (released contacts, saturated servo rows)
+    tangent: np.ndarray  # every contact's tangent rows 3i+1, then 3i+2
+    diag_T: np.ndarray  # positions in K.flat of their diagonal entries
+    dT_dN: np.ndarray  # ... of their derivatives by p_N, (3i+1, 3i), (3i+2, 3i)
+    diag_pinned: np.ndarray  # ... of the pinned rows' diagonal entries
+    circle: np.ndarray  # ... of the circle's entries, in the order ``_NewtonSystem.at`` lists their values
+    ones: np.ndarray  # (2k,) the circle's first values
+
+
+@functools.lru_cache(maxsize=256)
+def _layout(m: int, n: int, sliding: bytes, pinned: bytes) -> _Layout:
+    """The ``_Layout`` of m contacts and n rows with the masks ``sliding`` (m,) and ``pinned`` (n,),
+    as bytes: it depends only on them, and an active set seldom changes, so it is kept (read only)."""
+    S = np.flatnonzero(np.frombuffer(sliding, dtype=bool))
+    size = n + len(S)
+    N = 3 * S
+    T1, T2, D = N + 1, N + 2, np.arange(n, size)
+    pinned_rows = np.flatnonzero(np.frombuffer(pinned, dtype=bool))
     i = np.arange(m)
-    return np.concatenate([3 * i + 1, 3 * i + 2]), np.concatenate([3 * i, 3 * i])
+    tangent, normal = np.concatenate([3 * i + 1, 3 * i + 2]), np.concatenate([3 * i, 3 * i])
+    # K.flat positions of (T1, T1), (T2, T2), (T1, N), (T2, N), (T1, D), (T2, D), (D, D)
+    circle = np.concatenate([T1 * size + T1, T2 * size + T2, T1 * size + N, T2 * size + N, T1 * size + D,
+                             T2 * size + D, D * size + D])
+    layout = _Layout(S, N, T1, T2, D, np.concatenate([T1, T2]), pinned_rows, tangent, tangent * (size + 1),
+                     tangent * size + normal, pinned_rows * (size + 1), circle, np.ones(2 * len(S)))
+    for a in layout:
+        a.flags.writeable = False
+    return layout
 
 
 def _corrected(problem, X, theta, act: ActiveSet, r) -> ActiveSet:

@@ -226,7 +226,7 @@ def impulse_floor(problem: LeastAction) -> float:
     m = problem.m
     if m == 0:
         return 0.0
-    c_N, H_NN = problem.c[0:3 * m:3], np.diag(problem.H)[0:3 * m:3]
+    c_N, H_NN = problem.c[0:3 * m:3], problem.H.diagonal()[0:3 * m:3]
     return RELEASED * float(np.max(np.abs(c_N) / H_NN))
 
 

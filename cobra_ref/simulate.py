@@ -185,7 +185,8 @@ class _Log:
             s[key][k] = res.residuals[key]
         s["max_penetration"][k] = max(0.0, -float(cs.g.min())) if cs.m else 0.0
         s["n_contacts"][k] = cs.m
-        s["max_normal_force"][k] = float(res.p[0::3].max()) / self.dt if cs.m else 0.0
+        p_N = res.p[0::3]
+        s["max_normal_force"][k] = float(p_N.max()) / self.dt if cs.m else 0.0
         if len(joints.v):
             q_joint = res.q[joints.q]
             s["tau_excess"][k] = float((np.abs(res.tau) - joints.tau_max).max())
@@ -198,7 +199,7 @@ class _Log:
             s[key][k] = getattr(res, key)
         self.tau[k] = res.tau
         # the contact log, and the impacts: contacts that start carrying load while approaching
-        active = np.flatnonzero(res.p[0::3] > 0.0)
+        active = (p_N > 0.0).nonzero()[0]
         keys = cs.keys()
         active_keys = [keys[i] for i in active.tolist()]
         onset = np.array([key not in self.loaded for key in active_keys], dtype=bool)
@@ -220,8 +221,9 @@ class _Log:
             p3 = res.p.reshape(-1, 3)[active]
             rows["contact_force"].append((frame @ p3[:, :, None])[:, :, 0] / self.dt)
             rows["contact_onset_speed"].append(speed)
-            rows["contact_gap"].append(cs.g[active])
-            rows["contact_gap_end"].append(cs.g[active] + self.dt * res.w[0::3][active])
+            g = cs.g[active]
+            rows["contact_gap"].append(g)
+            rows["contact_gap_end"].append(g + self.dt * res.w[0::3][active])
         self.n = k + 1
 
     def finish(self, wall_time: float, error: str = "", meta: dict | None = None) -> Trajectory:

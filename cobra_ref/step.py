@@ -214,7 +214,7 @@ def step_result(model: Model, system: StepSystem, x: np.ndarray, info: LeastActi
     tau = settings.joint_servo.torque(x[3 * m:], dt, recovered)
     return StepResult(q=integrate_step(s.q, qd_next), qd=qd_next, tau=tau, contacts=s.contacts, p=p,
                       w=s.J_c @ qd_next, info=info, residuals=kkt_residuals(s.problem, x),
-                      approach=approach_speed(s.J_c, s.qd), G_NN=np.diag(s.G)[:3 * m:3],
+                      approach=approach_speed(s.J_c, s.qd), G_NN=s.G.diagonal()[:3 * m:3],
                       **energies(model, s, qd_next, p, tau, settings), q_ref=s.q_ref,
                       memory=warm_start_memory(s.contacts, x, s.qd))
 
@@ -241,7 +241,7 @@ def least_action_problem(model: Model, G, c_free, contacts: Contacts, settings: 
     reference at the step's start), bounded by tau_max dt.
     """
     m, dt, law = contacts.m, settings.dt, settings.law
-    d = np.diag(G)
+    d = G.diagonal()
     R_N, b_N = law.normal_rows(model, contacts.g, d[0:3 * m:3], dt)
     R, b = np.zeros(len(d)), np.zeros(len(d))
     R[0:3 * m:3], b[0:3 * m:3] = R_N, b_N
@@ -332,6 +332,6 @@ def energies(model: Model, system: StepSystem, qd_next, p, tau, settings: StepSe
 def _reference(reference, t: float):
     """The reference at t, or a SimulationError naming the time where it stops being finite."""
     values = [np.asarray(v, dtype=float) for v in reference(t)]
-    if not all(np.all(np.isfinite(v)) for v in values):
+    if not all(np.isfinite(v).all() for v in values):
         raise SimulationError(f"the joint reference is not finite at t = {t:.4f} s: {values[0]}")
     return values

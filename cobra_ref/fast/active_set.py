@@ -108,7 +108,7 @@ def solve_box(qp: BoxQP, x0, eps: tuple, rounds: int = ROUNDS, guess=None):
         before = at_lo, at_hi
         x = np.where(at_hi, hi, lo)
         free = ~(at_lo | at_hi)
-        F = np.flatnonzero(free)  # the free variables' indices (take copies rows faster than a mask)
+        F = free.nonzero()[0]  # the free variables' indices (take copies rows faster than a mask)
         if len(F):
             x[F] = 0.0
             # H_FF x_F = -(c_F + H_FW x_W): LAPACK's Cholesky solve (posv)

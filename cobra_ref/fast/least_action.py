@@ -76,9 +76,10 @@ class FastBoxQP:
         if key not in self._solvers:
             rows, cols = np.triu_indices(n)
             order = np.lexsort((rows, cols))  # column-major, as CSC stores it
-            self._upper[n] = (rows[order], cols[order])
+            rows, cols = rows[order], cols[order]
+            self._upper[n] = rows * n + cols  # their positions in H's (row-major) flat order, for take
             indptr = np.concatenate([[0], np.cumsum(np.arange(1, n + 1))])
-            P = sparse.csc_matrix((H[self._upper[n]], self._upper[n][0], indptr), shape=(n, n))
+            P = sparse.csc_matrix((H.take(self._upper[n]), rows, indptr), shape=(n, n))
             solver = osqp.OSQP()
             eps = LOOSE_EPS if loose else EPS
             solver.setup(P=P, q=c, A=sparse.identity(n, format="csc"), l=lo, u=hi, eps_abs=eps, eps_rel=eps,
@@ -90,6 +91,6 @@ class FastBoxQP:
             self._solvers[key] = solver
         else:
             solver = self._solvers[key]
-            solver.update(Px=H[self._upper[n]], q=c, l=lo, u=hi)
+            solver.update(Px=H.take(self._upper[n]), q=c, l=lo, u=hi)
         solver.warm_start(x=x0, y=np.zeros(n) if y0 is None else y0)
         return solver.solve(raise_error=False)

@@ -81,7 +81,7 @@ class FastStepper:
         s, model, F, P = self.settings, self.model, self.free, self.prescribed
         dt, servo = s.dt, s.joint_servo
         clock = [time.perf_counter()]
-        tau_ext = np.zeros(model.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
+        tau_ext = np.zeros(self.chain.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
         # Steps 1-3: eq. (1) with h at the midpoint velocity, the joints, qd_free over the free coordinates
         terms = self.chain.terms(q, midpoint_velocity(qd, self.memory))
         M, h = terms.M, terms.h
@@ -135,7 +135,7 @@ class FastStepper:
         for _, iq, iv in chain.free:
             q_next[iq:iq + 3] += dt * qd[iv:iv + 3]
             quat = quat_mul(q[iq + 3:iq + 7], quat_exp(dt * qd[iv + 3:iv + 6]))
-            q_next[iq + 3:iq + 7] = quat / np.linalg.norm(quat)
+            q_next[iq + 3:iq + 7] = quat / np.sqrt(quat.dot(quat))  # np.linalg.norm's own sum, without its checks
         return q_next
 
 
