@@ -1,0 +1,91 @@
+"""``cobra-ref push``: push the box to a point (and through waypoints), re-planning every period.
+
+The command-line side of :mod:`cobra_ref.planning.receding` (conventions: :mod:`cobra_ref.cli.common`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+
+from ..infra.executors import SerialExecutor, own_pool
+from ..infra.validation import RULES
+from .common import add_model_options, c_stdout_silenced, check_out, fail, model_parameters, write_text_atomic
+
+
+def add_parsers(sub) -> None:
+    """Add the ``push`` subcommand to ``sub``."""
+    from ..planning.receding import PushOptions
+
+    d = PushOptions()
+    p = sub.add_parser(
+        "push", help="push the box to a point, re-planning every period (receding horizon)",
+        description="Push the box to a goal (through waypoints): every PERIOD seconds, from the state reached, "
+                    "roll out candidate primitives (rolling shapes with amplitude, frequency and taper, and a "
+                    "stop) over HORIZON periods, apply the best for one period, repeat; see "
+                    "cobra_ref/planning/receding.py and docs/planning.md. One progress line per period on stderr, "
+                    "one JSON line on stdout. OUT holds the executed run (an NPZ like simulate's); PLAN the chosen "
+                    "primitives (a JSON that replays to the same run, bit for bit). Ctrl-C keeps what was executed.")
+    p.add_argument("--goal", type=RULES["goal_pair"].arg("--goal"), required=True, metavar="X,Y",
+                   help="where to push the box, relative to its start [m], world axes (x = the robot's initial "
+                        "heading, y = its left; a negative X needs --goal=-0.1,0.2)")
+    p.add_argument("--via", type=RULES["goal_pair"].arg("--via"), action="append", default=[], metavar="X,Y",
+                   help="a waypoint on the way, same axes (repeatable, in order)")
+    p.add_argument("--budget", type=RULES["push_budget"].arg("--budget"), default=d.budget,
+                   help=f"simulated time at most [s] (default {d.budget:g})")
+    p.add_argument("--period", type=RULES["push_period"].arg("--period"), default=d.period,
+                   help=f"one re-plan per period [s] (default {d.period:g})")
+    p.add_argument("--horizon", type=RULES["push_horizon"].arg("--horizon"), default=d.horizon,
+                   help=f"periods each rollout looks ahead (default {d.horizon})")
+    p.add_argument("--samples", type=RULES["push_samples"].arg("--samples"), default=d.samples,
+                   help=f"noisy copies of the last choice per re-plan (default {d.samples})")
+    p.add_argument("--tolerance", type=RULES["push_tolerance"].arg("--tolerance"), default=d.tolerance,
+                   help=f"the push ends with the box within this of the goal [m] (default {d.tolerance:g})")
+    p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=0, help="seed of the sampling noise (default 0)")
+    add_model_options(p)
+    p.add_argument("--workers", type=RULES["workers"].arg("--workers"), default=None,
+                   help="worker processes for the rollouts (default: the cores; 1 = serial, in this process)")
+    p.add_argument("--out", required=True, help="the executed run (NPZ, exactly this name)")
+    p.add_argument("--plan", default=None, help="the plan JSON (default: OUT without its extension + .plan.json)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=cmd_push)
+
+
+def cmd_push(args) -> int:
+    """Run the push, write the run and the plan, print one JSON line. Exit 0 when the box reached
+    the goal, 1 when the budget ran out first, 130 after Ctrl-C (what was executed is written)."""
+    from ..planning.receding import PushOptions, push, push_record
+
+    plan_path = args.plan or os.path.splitext(args.out)[0] + ".plan.json"
+    check_out(args.out, "--out")
+    check_out(plan_path, "--plan")
+    options = PushOptions(goal=args.goal, via=tuple(args.via), budget=args.budget, period=args.period,
+                          horizon=args.horizon, samples=args.samples, tolerance=args.tolerance, seed=args.seed,
+                          cobra=model_parameters(args))
+    err = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+    interrupted = False
+    with c_stdout_silenced():
+        try:
+            if args.workers == 1:
+                result = push(options, SerialExecutor(), progress=err)
+            else:
+                with own_pool(args.workers) as executor:
+                    result = push(options, executor, progress=err)
+        except KeyboardInterrupt as exc:
+            result, interrupted = getattr(exc, "result", None), True
+            if result is None:
+                raise SystemExit(130) from None
+    record = push_record(result, options)
+    try:
+        result.trajectory.to_npz(args.out)
+    except OSError as exc:
+        raise fail(f"{args.out}: {exc}") from None
+    write_text_atomic(plan_path, json.dumps(record, indent=1) + "\n", "--plan")
+    print(f"{result.reason}: box {100 * record['final_distance']:.2f} cm from the goal after "
+          f"{record['simulated_time']:g} s; wrote {args.out} and {plan_path}", file=sys.stderr)
+    print(json.dumps({k: record[k] for k in ("reached", "reason", "final_distance", "simulated_time",
+                                             "impact_impulse_per_second", "rollouts", "wall_time")}))
+    if interrupted:
+        return 130
+    return 0 if result.reached else 1
