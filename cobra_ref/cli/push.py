@@ -10,7 +10,7 @@ import os
 import sys
 
 from ..infra.executors import SerialExecutor, own_pool
-from ..infra.validation import RULES
+from ..infra.validation import DEFAULT_DT, RULES
 from .common import add_model_options, c_stdout_silenced, check_out, fail, model_parameters, write_text_atomic
 
 
@@ -27,7 +27,7 @@ def add_parsers(sub) -> None:
                     "cobra_ref/planning/receding.py and docs/planning.md. One progress line per period on stderr, "
                     "one JSON line on stdout. OUT holds the executed run (an NPZ like simulate's); PLAN the chosen "
                     "primitives (a JSON that replays to the same run, bit for bit). Ctrl-C keeps what was executed.")
-    p.add_argument("--goal", type=RULES["goal_pair"].arg("--goal"), required=True, metavar="X,Y",
+    p.add_argument("--goal", type=RULES["goal_pair"].arg("--goal"), default=None, metavar="X,Y",
                    help="where to push the box, relative to its start [m], world axes (x = the robot's initial "
                         "heading, y = its left; a negative X needs --goal=-0.1,0.2)")
     p.add_argument("--via", type=RULES["goal_pair"].arg("--via"), action="append", default=[], metavar="X,Y",
@@ -43,11 +43,16 @@ def add_parsers(sub) -> None:
     p.add_argument("--tolerance", type=RULES["push_tolerance"].arg("--tolerance"), default=d.tolerance,
                    help=f"the push ends with the box within this of the goal [m] (default {d.tolerance:g})")
     p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=0, help="seed of the sampling noise (default 0)")
+    p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=DEFAULT_DT,
+                   help=f"time step of the plant and the rollouts [s] (default {DEFAULT_DT * 1e3:g} ms)")
     add_model_options(p)
     p.add_argument("--workers", type=RULES["workers"].arg("--workers"), default=None,
                    help="worker processes for the rollouts (default: the cores; 1 = serial, in this process)")
     p.add_argument("--out", required=True, help="the executed run (NPZ, exactly this name)")
     p.add_argument("--plan", default=None, help="the plan JSON (default: OUT without its extension + .plan.json)")
+    p.add_argument("--replay", metavar="PLAN", default=None,
+                   help="replay a plan JSON of an earlier push (no planning): OUT is then its executed run, bit for "
+                        "bit; the other planner options are the plan's")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_push)
 
@@ -56,13 +61,18 @@ def cmd_push(args) -> int:
     """Run the push, write the run and the plan, print one JSON line. Exit 0 when the box reached
     the goal, 1 when the budget ran out first, 130 after Ctrl-C (what was executed is written)."""
     from ..planning.receding import PushOptions, push, push_record
+    from ..step import StepSettings
 
+    if args.replay is not None:
+        return _replay(args)
+    if args.goal is None:
+        raise fail("give --goal X,Y (or --replay PLAN)")
     plan_path = args.plan or os.path.splitext(args.out)[0] + ".plan.json"
     check_out(args.out, "--out")
     check_out(plan_path, "--plan")
     options = PushOptions(goal=args.goal, via=tuple(args.via), budget=args.budget, period=args.period,
                           horizon=args.horizon, samples=args.samples, tolerance=args.tolerance, seed=args.seed,
-                          cobra=model_parameters(args))
+                          settings=StepSettings(dt=args.dt), cobra=model_parameters(args))
     err = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
     interrupted = False
     with c_stdout_silenced():
@@ -89,3 +99,23 @@ def cmd_push(args) -> int:
     if interrupted:
         return 130
     return 0 if result.reached else 1
+
+
+def _replay(args) -> int:
+    """``push --replay PLAN --out OUT``: the executed run of a plan, written to OUT."""
+    from ..planning.receding import load_push, replay
+
+    check_out(args.out, "--out")
+    try:
+        with open(args.replay, encoding="utf-8") as f:
+            plan, options = load_push(json.load(f))
+    except (OSError, ValueError, KeyError, TypeError, RecursionError) as exc:
+        raise fail(f"--replay {args.replay}: {exc}") from None
+    with c_stdout_silenced():
+        traj = replay(plan, options)
+    try:
+        traj.to_npz(args.out)
+    except OSError as exc:
+        raise fail(f"{args.out}: {exc}") from None
+    print(json.dumps(traj.summary()))
+    return 0
