@@ -75,3 +75,29 @@ def test_push_command_writes_the_run_and_a_plan_that_replays(tmp_path, capsys):
 def test_push_without_a_goal_is_refused(tmp_path):
     with pytest.raises(SystemExit, match="--goal"):
         main(["push", "--out", str(tmp_path / "run.npz")])
+
+
+def test_the_benchmark_has_sixteen_goals_around_the_box_and_two_paths():
+    from cobra_ref.planning.benchmark import GOALS
+
+    singles = [g for g in GOALS if not g[2]]
+    assert len(singles) == 16 and len(GOALS) == 18
+    distances = sorted({round(float(np.hypot(*g[1])), 9) for g in singles})
+    angles = sorted({round(float(np.degrees(np.arctan2(g[1][1], g[1][0]))) % 360) for g in singles})
+    assert distances == [0.25, 0.5] and angles == list(range(0, 360, 45))
+
+
+def test_a_benchmark_subset_writes_rows_and_a_picture(tmp_path):
+    from cobra_ref.planning.benchmark import run_benchmark, summary
+    from cobra_ref.viz.push_paths import plot_pushes
+
+    kept = []
+    tasks = (("ahead", (0.05, 0.0), ()), ("via", (0.05, 0.0), ((0.02, 0.0),)))
+    rows = run_benchmark(TINY, SerialExecutor(), tasks=tasks, keep=lambda r: kept.append(len(r)))
+    assert kept == [1, 2] and [r["task"] for r in rows] == ["ahead", "via"]
+    assert len(rows[1]["waypoint_passes"]) == 1 and rows[0]["simulated_time"] == pytest.approx(0.2)
+    s = summary(rows)
+    assert s["tasks"] == 2 and s["waypoints"] == 1
+    assert s["median_final_error"] == pytest.approx(np.median([r["final_error"] for r in rows]))
+    plot_pushes(rows, str(tmp_path / "paths.png"))
+    assert (tmp_path / "paths.png").stat().st_size > 1000

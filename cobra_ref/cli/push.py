@@ -5,6 +5,7 @@ The command-line side of :mod:`cobra_ref.planning.receding` (conventions: :mod:`
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import sys
@@ -53,6 +54,10 @@ def add_parsers(sub) -> None:
     p.add_argument("--replay", metavar="PLAN", default=None,
                    help="replay a plan JSON of an earlier push (no planning): OUT is then its executed run, bit for "
                         "bit; the other planner options are the plan's")
+    p.add_argument("--benchmark", action="store_true",
+                   help="push to the benchmark's 16 goals and 2 waypoint paths (cobra_ref/planning/benchmark.py) "
+                        "instead of --goal; OUT is then the JSON of the rows (rewritten after each task)")
+    p.add_argument("--figure", default=None, help="--benchmark: also draw every box path with its goal (PNG)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_push)
 
@@ -60,28 +65,24 @@ def add_parsers(sub) -> None:
 def cmd_push(args) -> int:
     """Run the push, write the run and the plan, print one JSON line. Exit 0 when the box reached
     the goal, 1 when the budget ran out first, 130 after Ctrl-C (what was executed is written)."""
-    from ..planning.receding import PushOptions, push, push_record
-    from ..step import StepSettings
+    from ..planning.receding import push, push_record
 
     if args.replay is not None:
         return _replay(args)
+    if args.benchmark:
+        return _benchmark(args)
     if args.goal is None:
         raise fail("give --goal X,Y (or --replay PLAN)")
     plan_path = args.plan or os.path.splitext(args.out)[0] + ".plan.json"
     check_out(args.out, "--out")
     check_out(plan_path, "--plan")
-    options = PushOptions(goal=args.goal, via=tuple(args.via), budget=args.budget, period=args.period,
-                          horizon=args.horizon, samples=args.samples, tolerance=args.tolerance, seed=args.seed,
-                          settings=StepSettings(dt=args.dt), cobra=model_parameters(args))
+    options = _options(args)
     err = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
     interrupted = False
     with c_stdout_silenced():
         try:
-            if args.workers == 1:
-                result = push(options, SerialExecutor(), progress=err)
-            else:
-                with own_pool(args.workers) as executor:
-                    result = push(options, executor, progress=err)
+            with _executor(args.workers) as executor:
+                result = push(options, executor, progress=err)
         except KeyboardInterrupt as exc:
             result, interrupted = getattr(exc, "result", None), True
             if result is None:
@@ -118,4 +119,47 @@ def _replay(args) -> int:
     except OSError as exc:
         raise fail(f"{args.out}: {exc}") from None
     print(json.dumps(traj.summary()))
+    return 0
+
+
+def _options(args):
+    """The ``PushOptions`` of the command line."""
+    from ..planning.receding import PushOptions
+    from ..step import StepSettings
+
+    return PushOptions(goal=args.goal if args.goal is not None else (0.25, 0.0), via=tuple(args.via), budget=args.budget, period=args.period,
+                       horizon=args.horizon, samples=args.samples, tolerance=args.tolerance, seed=args.seed,
+                       settings=StepSettings(dt=args.dt), cobra=model_parameters(args))
+
+
+@contextlib.contextmanager
+def _executor(workers):
+    """The rollouts' executor: serial with ``--workers 1``, else a process pool of our own."""
+    if workers == 1:
+        yield SerialExecutor()
+    else:
+        with own_pool(workers) as executor:
+            yield executor
+
+
+def _benchmark(args) -> int:
+    """``push --benchmark``: every benchmark task, the rows written to OUT after each one."""
+    from ..planning.benchmark import run_benchmark, summary
+
+    check_out(args.out, "--out")
+    if args.figure:
+        check_out(args.figure, "--figure")
+    err = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+
+    def keep(rows):
+        write_text_atomic(args.out, json.dumps({"summary": summary(rows), "rows": rows}, indent=1) + "\n", "--out")
+
+    with c_stdout_silenced():
+        with _executor(args.workers) as executor:
+            rows = run_benchmark(_options(args), executor, progress=err, keep=keep)
+    if args.figure:
+        from ..viz.push_paths import plot_pushes
+
+        plot_pushes(rows, args.figure)
+    print(json.dumps(summary(rows)))
     return 0
