@@ -20,9 +20,11 @@ torques. Where to go next: the README (install, the first five minutes, the comm
 equation of the paper lives), the runnable tutorials in ``tutorials/`` (``01_spatial_algebra`` to
 ``08_mujoco_like_for_like``), the command ``cobra-ref --help`` (``python -m cobra_ref``), the
 planner in ``cobra_ref.planning`` (``optimize_gait``) and the paper's results in
-``cobra_ref.reproduce.regenerate`` (``regenerate``). Notation: the README's "Notation" table.
-Conventions: spatial vectors are angular-first (``cobra_ref.spatial``); floating bases use
-MuJoCo's free joint (``cobra_ref.model``).
+``cobra_ref.reproduce.regenerate`` (``regenerate``). A bad argument to these functions raises
+``ArgumentError`` (a ValueError) or ``ArgumentTypeError`` (a TypeError) naming it, its value and
+what is allowed (the command line's rules, :mod:`cobra_ref.infra.arguments`). Notation: the
+README's "Notation" table. Conventions: spatial vectors are angular-first
+(``cobra_ref.spatial``); floating bases use MuJoCo's free joint (``cobra_ref.model``).
 """
 
 from .dynamics import (
@@ -36,6 +38,7 @@ from .dynamics import (
     spatial_momentum,
 )
 from .gaits import gait, gait_params
+from .infra.arguments import ArgumentError, ArgumentTypeError
 from .kinematics import body_jacobian, forward_kinematics, integrate, point_jacobian
 from .mjcf import to_mjcf
 from .model import Model, ModelError
@@ -50,7 +53,7 @@ from .trajectory import Trajectory
 
 
 __all__ = [
-    "BoxPlacement", "CobraParameters", "Model", "ModelError", "SimulationError", "StepSettings", "Trajectory",
+    "ArgumentError", "ArgumentTypeError", "BoxPlacement", "CobraParameters", "Model", "ModelError", "SimulationError", "StepSettings", "Trajectory",
     "bias_force", "body_jacobian", "body_kinetic_energies", "chain", "cobra_model", "crba", "forward_dynamics",
     "forward_kinematics", "gait", "gait_params", "initial_state", "integrate", "kinetic_energy", "make_stepper",
     "neutral_q", "point_jacobian", "potential_energy", "random_state", "rnea", "simulate", "spatial_momentum",

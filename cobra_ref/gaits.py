@@ -25,7 +25,9 @@ Bend profiles kappa_i of the rolling shapes (defaults: assumption A10):
                pitch joints unchanged (a reflection maps a rotation about y to itself)
 
 Every joint stays within |theta_i| <= A (rolling) or max(A_y, A_p) (sidewinding), which must be
-<= q_max = pi / 2 (assumption A4); bad values raise ``GaitError`` naming the parameter.
+<= q_max = pi / 2 (assumption A4); a value out of range raises ``GaitError`` (an
+``infra.arguments.ArgumentError``), one that is not a number an ``ArgumentTypeError``, each
+naming the parameter, the value and the allowed range.
 """
 
 from __future__ import annotations
@@ -34,6 +36,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .infra import arguments
+from .infra.rule import Rule
+
 N_JOINTS = 11
 Q_MAX = np.pi / 2  # joint range, assumption A4 (CobraParameters.q_max)
 YAW = np.arange(N_JOINTS) % 2 == 0  # even joints yaw, odd joints pitch
@@ -41,7 +46,7 @@ S = np.arange(N_JOINTS) / (N_JOINTS - 1)  # s_i = i / 10
 SHAPES = ("C", "S", "J", "J-mirror")
 
 
-class GaitError(ValueError):
+class GaitError(arguments.ArgumentError):
     """A gait parameter that cannot be used (the message names it)."""
 
 
@@ -71,11 +76,10 @@ def ramped_phase(t: float, omega: float, T: float):
     return phi, omega * r, omega * rd
 
 
-def _check(name: str, value: float, low: float = 0.0, high: float = np.inf, strict: bool = True) -> None:
-    ok = np.isfinite(value) and (value > low if strict else value >= low) and value <= high
-    if not ok:
-        bound = f"in ({low}, {high}]" if strict else f"in [{low}, {high}]"
-        raise GaitError(f"{name} must be finite and {bound}, got {value}")
+def _check(name: str, value, unit: str, low: float = 0.0, high: float = np.inf, strict: bool = True) -> None:
+    """A ``GaitError`` unless ``value`` is a finite number in (low, high] (``strict``) or [low, high];
+    an ``ArgumentTypeError`` for a value that is not a number (a string, a bool, None)."""
+    arguments.number(name, value, Rule(name, unit, low, high, low_open=strict), GaitError)
 
 
 @dataclass(frozen=True)
@@ -92,10 +96,10 @@ class _Periodic:
         return self.phase + phi, phid, phidd
 
     def _check_periodic(self) -> None:
-        _check("frequency", self.frequency, high=10.0)
-        _check("phase", self.phase, low=-np.inf)
+        _check("frequency", self.frequency, "Hz", high=10.0)
+        _check("phase", self.phase, "rad", low=-np.inf)
         if self.ramp_time is not None:
-            _check("ramp_time", self.ramp_time, strict=False)
+            _check("ramp_time", self.ramp_time, "s", strict=False)
 
 
 @dataclass(frozen=True)
@@ -110,10 +114,9 @@ class RollingGait(_Periodic):
     s_J: float = 0.5  # J only: the hook spans s_i <= s_J (assumption A10)
 
     def __post_init__(self):
-        if self.shape not in SHAPES:
-            raise GaitError(f"unknown rolling shape {self.shape!r}; use one of {', '.join(SHAPES)}")
-        _check("amplitude", self.amplitude, high=Q_MAX)
-        _check("s_J", self.s_J, strict=False, high=1.0)
+        arguments.choice("shape", self.shape, SHAPES, GaitError)
+        _check("amplitude", self.amplitude, "rad", high=Q_MAX)
+        _check("s_J", self.s_J, "-", strict=False, high=1.0)
         self._check_periodic()
         object.__setattr__(self, "_kappa", self.kappa())  # the profile is fixed: computed once, not per call
 
@@ -149,10 +152,10 @@ class SidewindingGait(_Periodic):
     delta: float = np.pi / 4  # pitch-yaw phase offset [rad]
 
     def __post_init__(self):
-        _check("amplitude_yaw", self.amplitude_yaw, high=Q_MAX)
-        _check("amplitude_pitch", self.amplitude_pitch, high=Q_MAX)
-        _check("spatial_frequency", self.spatial_frequency, low=-np.inf)
-        _check("delta", self.delta, low=-np.inf)
+        _check("amplitude_yaw", self.amplitude_yaw, "rad", high=Q_MAX)
+        _check("amplitude_pitch", self.amplitude_pitch, "rad", high=Q_MAX)
+        _check("spatial_frequency", self.spatial_frequency, "rad", low=-np.inf)
+        _check("delta", self.delta, "rad", low=-np.inf)
         self._check_periodic()
 
     def __call__(self, t: float):
@@ -179,8 +182,7 @@ def gait(name: str, **params):
     amplitude, frequency, phase, ramp_time, s_J, ... ) replacing them; a clear error for an
     unknown gait or parameter.
     """
-    if name not in GAITS:
-        raise GaitError(f"unknown gait {name!r}; gaits: {', '.join(GAITS)}")
+    arguments.choice("name", name, tuple(GAITS), GaitError)
     cls, fixed = GAITS[name]
     allowed = [f for f in cls.__dataclass_fields__ if f not in fixed]
     unknown = sorted(set(params) - set(allowed))

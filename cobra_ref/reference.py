@@ -21,12 +21,14 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .gaits import N_JOINTS, Q_MAX, GaitError, gait
+from .infra import arguments
+from .infra.validation import PARAMETER_RULES
 
 QD_MAX = 3.77  # [rad/s] the joint speed limit (CobraParameters.qd_max, assumption A6)
 CHECK_SAMPLES = 5000  # a reference is checked at this many times over a run (and at its own samples)
 
 
-class ReferenceError(ValueError):
+class ReferenceError(arguments.ArgumentError):
     """A reference that cannot be used (the message names the problem)."""
 
 
@@ -61,8 +63,12 @@ class SplineReference:
 
 def load_reference(path: str, q_max: float = Q_MAX) -> SplineReference:
     """Read a reference file (.npz or .csv, see the module docstring) with clear errors; every
-    sample's angle within ``q_max`` [rad].
+    sample's angle within ``q_max`` [rad] (the rule of ``CobraParameters.q_max``). A ``path`` that
+    is not a file name or a ``q_max`` that is not a number raises an ``infra.arguments``
+    ``ArgumentTypeError``, a ``q_max`` out of its range a ``ReferenceError``.
     """
+    path = arguments.path("path", path)
+    q_max = arguments.number("q_max", q_max, PARAMETER_RULES["q_max"], ReferenceError)
     if not os.path.isfile(path):
         raise ReferenceError(f"reference file not found: {path}")
     try:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .infra import arguments
 from .model import BoxGeom, Model, SphereSet
 from .params import CobraParameters
 
@@ -77,8 +78,10 @@ def cobra_model(params: CobraParameters | None = None, with_box: bool = True) ->
 
     Robot: nq = 18, nv = 17 (the paper's M is 17 x 17). With the box: nq = 25, nv = 23,
     q = [head x y z qw qx qy qz, theta_0..theta_10, box x y z qw qx qy qz]. The geometry and the
-    contact spheres are the module docstring's; every number comes from ``params``.
+    contact spheres are the module docstring's; every number comes from ``params`` (a
+    ``CobraParameters`` or None, else an ``infra.arguments.ArgumentTypeError``).
     """
+    arguments.instance("params", params, CobraParameters, "CobraParameters(mu=0.8)", optional=True)
     p = params or CobraParameters()
     n = p.n_body_links
     lengths = [p.length_head] + [p.length_link] * n + [p.length_tail]

@@ -21,14 +21,14 @@ from dataclasses import asdict
 import numpy as np
 
 from .contact import KINDS, find_contacts
+from .infra import arguments
 from .infra.executors import one_blas_thread
 from .model import Model
 from .qp import ContactSolveError
-from .start import initial_state
+from .start import check_run_arguments, initial_state
 from .step import SimulationError, StepSettings, joint_coordinates
-from .steppers import STEPPERS, make_stepper
+from .steppers import make_stepper
 from .trajectory import CONTACT_KEYS, STEP_KEYS, Trajectory
-from .infra.validation import ValidationError, step_count
 
 IMPACT_SPEED = 0.01  # [m/s] a contact that starts carrying load while approaching faster is an impact (A26)
 MAX_START_PENETRATION = 0.005  # [m] a start deeper in the ground or the box is refused
@@ -72,18 +72,17 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
     grid is checked before anything is allocated (``validation.step_count``; ``settings.dt`` was checked by
     ``StepSettings``): ``settings.dt`` within the stable range,
     ``round(duration / dt)`` steps, at least one and at most ``validation.MAX_STEPS`` (the
-    command line also asks for a whole number of steps). Raises ``SimulationError`` for a bad
-    duration or stepper, a start in deep penetration, or a failure mid-run; a failure mid-run,
+    command line also asks for a whole number of steps). A bad argument (a model that is not a
+    ``Model``, a reference that is not callable, settings that are not a ``StepSettings``, a bad
+    duration, stepper or progress) raises ``infra.arguments.ArgumentError`` (a ValueError) or
+    ``ArgumentTypeError`` (a TypeError) naming it. Raises ``SimulationError`` for a start in deep
+    penetration or a failure mid-run; a failure mid-run,
     of any exception type, names the step and time, and its ``trajectory`` attribute keeps
     everything computed before it (the original exception is its ``__cause__``). Ctrl-C
     (``KeyboardInterrupt``) is re-raised as it is, with the same ``trajectory`` attribute.
     """
-    try:
-        n_steps = step_count(duration, settings.dt, exact=False)  # settings.dt: checked by StepSettings
-    except ValidationError as exc:
-        raise SimulationError(str(exc)) from None
-    if stepper not in STEPPERS:
-        raise SimulationError(f"stepper must be one of {', '.join(STEPPERS)}, got {stepper!r}")
+    check_run_arguments(model, reference, settings, stepper, progress)
+    n_steps = arguments.duration_steps(duration, settings.dt)  # settings.dt: checked by StepSettings
     if q0 is None:
         q0, qd0 = initial_state(model, reference, settings, stepper=stepper)
     run = Run(model, settings, q0, qd0, stepper, n_steps)
@@ -107,13 +106,11 @@ class Run:
 
     def __init__(self, model: Model, settings: StepSettings, q0, qd0, stepper: str = "fast", capacity: int = 1,
                  t0: float = 0.0, memory: dict | None = None):
-        if stepper not in STEPPERS:
-            raise SimulationError(f"stepper must be one of {', '.join(STEPPERS)}, got {stepper!r}")
+        self.stepping = make_stepper(stepper, model, settings)  # checks the three (infra.arguments)
+        self.stepping.memory = memory
         self.model, self.settings, self.t0 = model, settings, float(t0)
         self.q, self.qd = model.check_q(q0).copy(), model.check_qd(np.zeros(model.nv) if qd0 is None else qd0).copy()
         check_start(model, self.q)
-        self.stepping = make_stepper(stepper, model, settings)
-        self.stepping.memory = memory
         self.log = _Log(model, capacity, settings.dt)
         self.log.add_state(self.t0, self.q, self.qd)
         self.k, self.wall_time, self._started = 0, 0.0, None

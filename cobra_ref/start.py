@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .infra import arguments
 from .infra.executors import one_blas_thread
 from .kinematics import forward_kinematics
 from .model import Model
@@ -38,22 +39,6 @@ SETTLE_SPEED = 1e-2  # [m/s, rad/s] until no coordinate moves faster (below the 
 SETTLE_STILL = 0.05  # [s] ... for this long in a row
 
 
-def _pair(value, name: str):
-    """value as two finite floats (dx, dy), else a ValueError naming ``name``."""
-    pair = np.asarray(value, dtype=float).reshape(-1)
-    if pair.shape != (2,) or not np.all(np.isfinite(pair)):
-        raise ValueError(f"{name} must be two finite numbers (dx, dy) in metres, got {value}")
-    return tuple(float(v) for v in pair)
-
-
-def _angle(value, name: str) -> float:
-    """value as a finite float, else a ValueError naming ``name``."""
-    angle = float(value)
-    if not np.isfinite(angle):
-        raise ValueError(f"{name} must be a finite angle in radians, got {value}")
-    return angle
-
-
 @dataclass(frozen=True)
 class BoxPlacement:
     """Where ``placed_state`` puts the box (its docstring states the rule); checked once, here.
@@ -62,8 +47,10 @@ class BoxPlacement:
     side); ``gap`` [m]: the clearance between the box's near face and the middle link (A9; not
     used with ``offset``); ``direction`` (dx, dy): the side the box goes to (None: the concave
     side); ``yaw`` [rad]: the box's heading (None: the placement's own); ``shift`` (dx, dy) [m] and
-    ``turn`` [rad]: added to the placed centre and yaw (an ensemble member's perturbation). Bad
-    values raise ValueError naming the field (as box_<field>) and the value.
+    ``turn`` [rad]: added to the placed centre and yaw (an ensemble member's perturbation). Each is
+    checked by the command line's rule (``validation.RULES``: box_offset, box_gap, box_yaw) or, for
+    the others, as finite: an ``infra.arguments`` error (a ValueError or TypeError) names the field
+    (as box_<field>), the value and what is allowed.
     """
 
     offset: tuple | None = None
@@ -77,21 +64,30 @@ class BoxPlacement:
         def put(field, value):
             object.__setattr__(self, field, value)
 
+        # each field by the command line's rule (--box-offset, --box-gap, --box-yaw), the rest finite
         if self.offset is not None:
-            put("offset", _pair(self.offset, "box_offset"))
-        if not np.isfinite(float(self.gap)):
-            raise ValueError(f"box_gap must be a finite clearance in metres, got {self.gap}")
-        put("gap", float(self.gap))
+            put("offset", arguments.numbers("box_offset", self.offset, 2, "box_offset", ("DX", "DY")))
+        put("gap", arguments.number("box_gap", self.gap, "box_gap"))
         if self.direction is not None:
-            d = np.asarray(self.direction, dtype=float).reshape(-1)[:2]
-            if not (d.shape == (2,) and np.all(np.isfinite(d)) and np.linalg.norm(d) > 0):
-                raise ValueError(f"box_direction must be a finite non-zero (dx, dy), got {self.direction}")
-            put("direction", tuple(float(v) for v in d))
+            put("direction", arguments.numbers("box_direction", self.direction, 2, labels=("DX", "DY")))
+            if not any(self.direction):
+                raise arguments.ArgumentError("box_direction = (0, 0) has no direction (allowed: a non-zero (DX, DY))")
         if self.yaw is not None:
-            put("yaw", _angle(self.yaw, "box_yaw"))
+            put("yaw", arguments.number("box_yaw", self.yaw, "box_yaw"))
         if self.shift is not None:
-            put("shift", _pair(self.shift, "box_shift"))
-        put("turn", _angle(self.turn, "box_turn"))
+            put("shift", arguments.numbers("box_shift", self.shift, 2, labels=("DX", "DY")))
+        put("turn", arguments.number("box_turn", self.turn))
+
+
+def check_run_arguments(model, reference, settings, stepper: str, progress=None) -> None:
+    """The arguments a run starts from (``initial_state``, ``simulate``), each of its kind: a
+    ``Model``, a callable reference, a ``StepSettings``, a stepper of ``steppers.STEPPERS`` and a
+    callable or None ``progress``; an ``infra.arguments`` error naming the first that is not."""
+    arguments.instance("model", model, Model, "cobra_model()")
+    arguments.function("reference", reference, "a joint reference t -> (q, qd, qdd), e.g. gait('C')")
+    arguments.instance("settings", settings, StepSettings, "StepSettings(dt=0.001)")
+    arguments.choice("stepper", stepper, STEPPERS)
+    arguments.function("progress", progress, "a function progress(done, total)", optional=True)
 
 
 def initial_state(model: Model, reference, settings: StepSettings = StepSettings(),
@@ -101,10 +97,11 @@ def initial_state(model: Model, reference, settings: StepSettings = StepSettings
 
     Implements: the start at rest (assumption A25): the joints hold the reference's t = 0
     shape while the robot and the box come to rest on the ground under ``settings``' contact
-    law and servo; what is left of their motion (below SETTLE_SPEED) is returned as qd0.
+    law and servo; what is left of their motion (below SETTLE_SPEED) is returned as qd0. The
+    arguments are checked first (``check_run_arguments``; ``placement`` a ``BoxPlacement``).
     """
-    if stepper not in STEPPERS:
-        raise ValueError(f"stepper must be one of {', '.join(STEPPERS)}, got {stepper!r}")
+    check_run_arguments(model, reference, settings, stepper)
+    arguments.instance("placement", placement, BoxPlacement, "BoxPlacement(gap=0.05)")
     q = placed_state(model, reference, placement)
     qd = np.zeros(model.nv)
     if settle:

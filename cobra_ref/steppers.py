@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import time
 
+from .infra import arguments
 from .model import Model
 from .step import StepResult, StepSettings, step
 
@@ -56,8 +57,12 @@ class ReferenceStepper:
 def make_stepper(name: str, model: Model, settings: StepSettings = StepSettings()):
     """A new stepper of kind ``name`` (one of ``STEPPERS``) for ``model`` under ``settings``.
 
-    Raises ValueError naming the allowed names for any other ``name``.
+    Raises ValueError naming the allowed names for any other ``name``, an
+    ``infra.arguments.ArgumentTypeError`` for a model that is not a ``Model`` or settings that are
+    not a ``StepSettings``.
     """
+    arguments.instance("model", model, Model, "cobra_model()")
+    arguments.instance("settings", settings, StepSettings, "StepSettings(dt=0.001)")
     if name == "fast":
         from .fast.stepper import FastStepper
 

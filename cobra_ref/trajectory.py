@@ -28,11 +28,15 @@ hold steps (from t_k to t_k+1):
 
 from __future__ import annotations
 
+import contextlib
 import json
+import zipfile
+import zlib
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .infra import arguments
 from .infra.output import write_binary
 
 STEP_KEYS = ("fp_converged", "fp_iter", "qp_iter", "qp_solves", "coulomb_residual", "complementarity",
@@ -139,9 +143,12 @@ class Trajectory:
         """Read back what ``to_npz`` wrote.
 
         The cache of the figure runs, and users' own analysis. A record written before one of
-        ``ADDED_KEYS`` existed reads it as zeros; any other missing key is a KeyError.
+        ``ADDED_KEYS`` existed reads it as zeros. A ``path`` that is not a file name raises an
+        ``infra.arguments.ArgumentTypeError``; a file that cannot be opened an ``OSError``; one
+        that is not an NPZ, is damaged or lacks an array of a run an ``ArgumentError`` naming the
+        file (``_open_npz``).
         """
-        with np.load(path, allow_pickle=False) as z:
+        with _open_npz(arguments.path("path", path)) as z:
             n, m = len(z["tau"]), len(z["contact_step"])
             return cls(float(z["dt"]), z["t"], z["q"], z["qd"], z["tau"], z["box_pose"],
                        {k: _read(z, k, n) for k in STEP_KEYS}, {k: _read(z, k, m) for k in CONTACT_KEYS},
@@ -161,6 +168,34 @@ class Trajectory:
 
 
 ADDED_KEYS = ("max_normal_force", "contact_gap", "contact_gap_end")  # keys a record may predate
+RUN_KEYS = ("t", "q", "qd", "tau", "box_pose", "dt", "wall_time", "meta", "error")  # besides the step and contact keys
+
+
+NOT_A_RUN = "allowed: an NPZ written by Trajectory.to_npz or cobra-ref simulate"
+
+
+@contextlib.contextmanager
+def _open_npz(path: str):
+    """``np.load(path)`` of a run's NPZ, checked, for a ``with`` block: an ``ArgumentError`` naming
+    ``path`` for a file that is not a zip archive, lacks an array that ``from_npz`` reads, or is
+    damaged (an array that cannot be read in the block); an ``OSError`` (a missing file, a
+    directory) as ``open`` raises it."""
+    with open(path, "rb"):  # a missing file, a directory: the OSError of open
+        pass
+    if not zipfile.is_zipfile(path):  # an NPZ is a zip archive (a truncated one has lost its directory)
+        raise arguments.ArgumentError(f"path = {path!r} is not an NPZ (zip) archive ({NOT_A_RUN})")
+    with np.load(path, allow_pickle=False) as z:
+        needed = RUN_KEYS + tuple(k for k in STEP_KEYS + CONTACT_KEYS if k not in ADDED_KEYS)
+        missing = [k for k in needed if k not in z.files]
+        if missing:
+            raise arguments.ArgumentError(f"path = {path!r} is not a run's NPZ: it lacks {len(missing)} of its "
+                                          f"arrays ({', '.join(missing[:5])}{', ...' if len(missing) > 5 else ''}; "
+                                          f"{NOT_A_RUN})")
+        try:
+            yield z
+        except (zipfile.BadZipFile, zlib.error, EOFError, TypeError, ValueError) as exc:  # a damaged array
+            raise arguments.ArgumentError(f"path = {path!r}: a damaged run NPZ ({type(exc).__name__}: {exc}; "
+                                          f"{NOT_A_RUN})") from None
 
 
 def _read(z, key: str, n: int) -> np.ndarray:

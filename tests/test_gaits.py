@@ -97,13 +97,13 @@ def test_sidewinding_by_hand_after_the_ramp():
 
 
 @pytest.mark.parametrize("make, message", [
-    (lambda: RollingGait(amplitude=-0.1), "amplitude must be finite"),
-    (lambda: RollingGait(amplitude=2.0), "amplitude must be finite"),
-    (lambda: RollingGait(frequency=float("nan")), "frequency must be finite"),
-    (lambda: RollingGait(frequency=-0.5), "frequency must be finite"),
-    (lambda: RollingGait(shape="U"), "unknown rolling shape 'U'"),
-    (lambda: SidewindingGait(amplitude_pitch=float("nan")), "amplitude_pitch must be finite"),
-    (lambda: gait("slithering"), "unknown gait 'slithering'"),
+    (lambda: RollingGait(amplitude=-0.1), r"amplitude = -0.1 rad is out of range \(allowed: \(0, pi/2\] rad\)"),
+    (lambda: RollingGait(amplitude=2.0), r"amplitude = 2 rad is out of range \(allowed: \(0, pi/2\] rad\)"),
+    (lambda: RollingGait(frequency=float("nan")), "frequency = nan is not finite"),
+    (lambda: RollingGait(frequency=-0.5), r"frequency = -0.5 Hz is out of range \(allowed: \(0, 10\] Hz\)"),
+    (lambda: RollingGait(shape="U"), "shape = 'U' is unknown"),
+    (lambda: SidewindingGait(amplitude_pitch=float("nan")), "amplitude_pitch = nan is not finite"),
+    (lambda: gait("slithering"), "name = 'slithering' is unknown"),
 ])
 def test_bad_gait_parameters_raise_naming_the_parameter(make, message):
     with pytest.raises(GaitError, match=message):

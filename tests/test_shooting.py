@@ -19,6 +19,7 @@ import pytest
 from cobra_ref import planning as sh
 from cobra_ref.cli.optimize import add_parsers
 from cobra_ref.cli.simulate import cmd_simulate_params
+from cobra_ref.infra.arguments import ArgumentTypeError
 from cobra_ref.planning.problem import Weights
 from cobra_ref.planning.results import params_reference
 
@@ -384,16 +385,16 @@ def test_params_json_with_broken_settings_is_a_clear_error(params_file, tmp_path
 # --- bad input -------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("goal, message", [
-    (("a", "b"), "two numbers"),
-    ((0.1,), "two finite numbers"),
-    ((np.nan, 0.0), "two finite numbers"),
-    ((10.0, 0.0), "unreachable"),
-    ((0.3, 0.0), "unreachable"),  # 0.3 m in 0.3 s: more than 0.5 m/s
-    ((0.0, 0.0), "where the box starts"),
+@pytest.mark.parametrize("goal, error, message", [
+    (("a", "b"), ArgumentTypeError, "goal X = 'a' is not a number"),
+    ((0.1,), sh.ShootingError, r"goal = \(0.1,\) has 1 value \(allowed: 2 numbers \(X, Y\)\)"),
+    ((np.nan, 0.0), sh.ShootingError, "goal X = nan is not finite"),
+    ((10.0, 0.0), sh.ShootingError, r"goal = \(10, 0\) m is unreachable: 10 m from the box's start"),
+    ((0.3, 0.0), sh.ShootingError, "unreachable"),  # 0.3 m in 0.3 s: more than 0.5 m/s
+    ((0.0, 0.0), sh.ShootingError, "where the box starts"),
 ])
-def test_bad_goals_are_clear_errors(goal, message):
-    with pytest.raises(sh.ShootingError, match=message):
+def test_bad_goals_are_clear_errors(goal, error, message):
+    with pytest.raises(error, match=message):
         tiny_problem(goal=goal)
 
 
@@ -404,7 +405,7 @@ def test_bounds_that_exclude_the_initial_guess_are_a_clear_error():
         tiny_problem(bounds={"frequency": (1.0, 0.6)})
     with pytest.raises(sh.ShootingError, match="amplitude"):  # beyond q_max = pi/2: the gait rejects it
         tiny_problem(names=("amplitude",), bounds={"amplitude": (0.3, 2.0)})
-    with pytest.raises(sh.ShootingError, match="unknown gait"):
+    with pytest.raises(sh.ShootingError, match=r"gait_name = .walking. is unknown \(allowed: C, S, J, J-mirror, sidewinding\)"):
         sh.make_problem("walking", GOAL)
 
 
@@ -538,7 +539,7 @@ def test_with_the_position_servo_the_optimum_respects_the_torque_and_joint_limit
     assert serial_result.best["terms"]["tau_limit"] == 0.0 and serial_result.best["terms"]["q_limit"] == 0.0
     again = sh.problem_from_dict(sh.problem_to_dict(problem))
     assert again == problem and (again.settings.servo, again.settings.contact) == ("position", "compliant")
-    with pytest.raises(sh.ShootingError, match="settings must be a StepSettings"):
+    with pytest.raises(ArgumentTypeError, match="settings = 'stiff' is a str, not a StepSettings"):
         tiny_problem(settings="stiff")
 
 

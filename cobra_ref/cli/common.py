@@ -89,14 +89,33 @@ def failed_path(out: str) -> str:
     return os.path.splitext(out)[0] + ".failed.npz"
 
 
-def _keep_partial(traj, out: str) -> str:
+def _keep_partial(traj, out: str, until: str = "the failure") -> str:
     """Write a partial run to ``failed_path(out)``; the sentence that says where it is (or why not)."""
     failed = failed_path(out)
     try:
         traj.to_npz(failed)
     except (OSError, ValueError) as exc:
         return f"what was computed could not be kept: {exc}"
-    return f"what was computed up to the failure is in {failed}"
+    return f"what was computed up to {until} is in {failed}"
+
+
+def say_interrupted(exc: BaseException | None, kept: str) -> int:
+    """Print the one line of a command stopped by Ctrl-C or SIGTERM on stderr,
+    ``interrupted (SIGTERM): KEPT``, on a line of its own after a progress line; return the exit
+    status, 130 for Ctrl-C and 143 for SIGTERM (``signals.exit_status``).
+    """
+    from ..infra.progress import end_line
+    from ..infra.signals import exit_status, signal_name
+
+    end_line()
+    print(f"interrupted ({signal_name(exc)}): {kept}", file=sys.stderr, flush=True)
+    return exit_status(exc)
+
+
+def interrupted_exit(exc: BaseException | None, kept: str) -> SystemExit:
+    """The ``SystemExit`` of a command stopped by Ctrl-C or SIGTERM (raise it), after
+    ``say_interrupted``'s line."""
+    return SystemExit(say_interrupted(exc, kept))
 
 
 @dataclass(frozen=True)
@@ -143,18 +162,18 @@ def run_and_write(job: Job, out: str, label: str, quiet: bool = False, meta=None
         where = _keep_partial(exc.trajectory, out)
         print(json.dumps(exc.trajectory.summary()))
         raise fail(f"{exc}\n{where}") from None
-    except KeyboardInterrupt as exc:
+    except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM (signals.stop_signals)
         traj = getattr(exc, "trajectory", None)
         if traj is None:
-            raise SystemExit(130) from None
+            raise
         traj.meta.update(meta or {})
-        print(f"interrupted at {traj.error}\n{_keep_partial(traj, out)}", file=sys.stderr)
-        raise SystemExit(130) from None
+        where = traj.error.rsplit(": ", 1)[0]  # "step k (t = ... s)"
+        raise interrupted_exit(exc, f"stopped at {where}; {_keep_partial(traj, out, 'the interrupt')}") from None
     traj.meta.update(meta or {})
     try:
         traj.to_npz(out)
-    except OSError as exc:  # the target changed during the run (checked before it)
-        raise fail(f"{exc}\n{_keep_partial(traj, out)}") from None
+    except OSError as exc:  # a full disk, or the target changed during the run (checked before it)
+        raise fail(f"{exc}; {_keep_partial(traj, out)}") from None
     print(json.dumps({**traj.summary(), **(summary(traj) if summary else {})}))
     return traj
 

@@ -7,14 +7,17 @@ import json
 import os
 import sys
 
-from .common import c_stdout_silenced
+from .common import c_stdout_silenced, fail, interrupted_exit
+from ..infra.output import OutputError
+from ..infra.signals import interrupted
 from ..infra.validation import RULES
 
 FULL_OUT, QUICK_OUT = "figures", "figures-quick"  # the default output directories
 
 
 def cmd_figures(args) -> int:
-    """Regenerate figures 3-9, the GIFs and the claims report.
+    """Regenerate figures 3-9, the GIFs and the claims report; Ctrl-C or SIGTERM ends the workers
+    and says what was kept (exit status 130 or 143).
     """
     from ..reproduce.regenerate import OPTIMIZED_DIR, FiguresOptions, check_output_dir, regenerate
     from ..reproduce.runs import PAPER_GAITS
@@ -38,7 +41,16 @@ def cmd_figures(args) -> int:
         options = FiguresOptions(quick=args.quick, force=args.force, mujoco=mujoco, gaits=gaits,
                                  n_members=args.members, optimized_dir=None if args.defaults else OPTIMIZED_DIR,
                                  reoptimize_all=args.reoptimize)
-        result = regenerate(out, options, cache_dir=args.cache, workers=args.jobs, progress=not args.quiet)
+        try:
+            result = regenerate(out, options, cache_dir=args.cache, workers=args.jobs, progress=not args.quiet)
+        except OutputError as exc:  # a write that failed late (a full disk): the runs stored so far are kept
+            cache = args.cache or os.path.join(out, ".cache")
+            raise fail(f"{exc}; the runs finished before are kept in the cache {cache} (the next run reads "
+                       "them)") from None
+        except BaseException as exc:
+            if not interrupted(exc):
+                raise
+            raise interrupted_exit(exc, _kept(exc, out, args.cache or os.path.join(out, ".cache"))) from None
     summary = {"smoke run": True} if args.quick else {}
     summary |= {"out": out, "files": len(result["files"]),
                 "claims": {c["id"]: c.get("verdict", c["holds"]) for c in result["claims"]},
@@ -49,6 +61,18 @@ def cmd_figures(args) -> int:
         summary["check"] = "agrees" if status == 0 else "mismatch"
     print(json.dumps(summary))
     return status
+
+
+def _kept(exc: BaseException, out: str, cache_dir: str) -> str:
+    """What an interrupted ``figures`` kept, in words: the simulations it finished (``runs.run_all``
+    names them on the interrupt), each in the cache that the next run reads, and the files written
+    before the interrupt."""
+    kept = getattr(exc, "kept", None)
+    if kept is None:  # interrupted before or after the simulations
+        return (f"the simulations finished are in the cache {cache_dir}, the figures and reports written "
+                f"before the interrupt in {out}; the next run reads the cache")
+    return (f"{len(kept['stored'])} of the {kept['todo']} simulations to run finished, kept in the cache "
+            f"{kept['cache_dir']} (the next run reads them); no figure was drawn")
 
 
 def _committed_claims(out_dir: str) -> list:

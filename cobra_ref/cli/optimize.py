@@ -12,11 +12,13 @@ import numpy as np
 
 from ..infra.executors import SerialExecutor
 from ..planning.problem import DECISION, DEFAULTS, RAMP_TIME, DecisionSpace, ShootingError, Weights, make_problem
-from ..planning.results import summary_lines, write_result
+from ..infra.output import OutputError
+from ..planning.checkpoint import Checkpoint
+from ..planning.results import summary_lines
 from ..planning.search import SearchOptions, optimize
 from ..step import StepSettings
 from ..infra.validation import DEFAULT_DT, RULES, ValidationError
-from .common import add_model_options, c_stdout_silenced, check_writable, model_parameters
+from .common import add_model_options, c_stdout_silenced, check_writable, fail, model_parameters, say_interrupted
 
 
 def _assignments(items, n_values: int, what: str) -> dict:
@@ -49,7 +51,11 @@ def add_parsers(sub) -> None:
                     "joint-limit penalties; see cobra_ref/planning/). One progress "
                     "line per iteration and a summary on stderr, one JSON line on stdout; OUT holds the optimum "
                     "('params'), every rollout ('history') and every setting; 'cobra-ref simulate --params OUT' "
-                    "replays it. Ctrl-C stops and writes the best rollout so far (with \"interrupted\": true).")
+                    "replays it. OUT is rewritten after every batch of rollouts (with \"checkpoint\": true until "
+                    "the search ends), so a run stopped by force keeps what it computed; when OUT cannot be "
+                    "written at the end, the result goes to a file in the temporary directory, named in the "
+                    "error. Ctrl-C or SIGTERM stops it and writes the best rollout so far (with \"interrupted\": "
+                    "true; exit status 130 or 143).")
     p.add_argument("--gait", required=True, choices=list(DECISION), help="the gait family")
     p.add_argument("--goal", type=RULES["goal_pair"].arg("--goal"), default=None, metavar="X,Y",
                    help="where to push the box, relative to its start [m], world axes (x = the robot's initial "
@@ -92,9 +98,12 @@ def add_parsers(sub) -> None:
 
 
 def cmd_optimize(args) -> int:
-    """Run the optimization, write the params JSON, print the summary (stderr) and one JSON line.
+    """Run the optimization, writing the params JSON after every batch (``planning.checkpoint``),
+    print the summary (stderr), write the result, print one JSON line.
 
-    ``cobra-ref optimize``. Exit status 0, or 130 after Ctrl-C (the file is still written).
+    ``cobra-ref optimize``. Exit status 0, or 130 after Ctrl-C and 143 after SIGTERM (the file is
+    still written, with the best rollout so far); 1 with one line naming the file and where the
+    result is when the final write fails.
     """
     check_writable(args.out)
     if args.workers is not None and args.workers < 1:
@@ -120,12 +129,18 @@ def cmd_optimize(args) -> int:
                else "one search: J"))
         search = SearchOptions(method=args.method, maxiter=maxiter, seed=args.seed, popsize=args.popsize,
                                companion=args.companion)
+        keeper = Checkpoint(args.out, err)
         result = optimize(problem, search, progress=None if args.quiet else err,
-                          executor=SerialExecutor() if args.workers == 1 else None, workers=args.workers)
-    record = write_result(result, args.out)
+                          executor=SerialExecutor() if args.workers == 1 else None, workers=args.workers,
+                          checkpoint=keeper)
     for line in summary_lines(result):
         err(line)
-    err(f"wrote {args.out}")
+    try:
+        record = keeper.final(result)
+    except OutputError as exc:
+        raise fail(exc) from None
+    if not result.interrupted:
+        err(f"wrote {args.out}")
     contact = record["contact"] or {}
     print(json.dumps({"out": args.out, "gait": args.gait, "params": record["params"], "cost": record["cost"],
                       "initial_cost": result.history[0]["cost"],
@@ -133,4 +148,6 @@ def cmd_optimize(args) -> int:
                       "max_complementarity": contact.get("max_complementarity"),
                       "max_cone_residual": contact.get("max_cone_residual"),
                       "interrupted": result.interrupted, "wall_time": round(result.wall_time, 1)}))
-    return 130 if result.interrupted else 0
+    if result.interrupted:  # Ctrl-C or SIGTERM: the last line says what was kept
+        return say_interrupted(None, f"the best of {len(result.history)} rollouts is kept in {args.out}")
+    return 0

@@ -12,7 +12,8 @@ import sys
 
 from ..infra.executors import SerialExecutor, own_pool
 from ..infra.validation import DEFAULT_DT, RULES
-from .common import add_model_options, c_stdout_silenced, check_out, fail, model_parameters, write_text_atomic
+from .common import (add_model_options, c_stdout_silenced, check_out, fail, interrupted_exit, model_parameters,
+                     say_interrupted, write_text_atomic)
 
 
 def add_parsers(sub) -> None:
@@ -64,7 +65,8 @@ def add_parsers(sub) -> None:
 
 def cmd_push(args) -> int:
     """Run the push, write the run and the plan, print one JSON line. Exit 0 when the box reached
-    the goal, 1 when the budget ran out first, 130 after Ctrl-C (what was executed is written)."""
+    the goal, 1 when the budget ran out first, 130 after Ctrl-C and 143 after SIGTERM (what was
+    executed is written)."""
     from ..planning.receding import push, push_record
 
     if args.replay is not None:
@@ -78,15 +80,15 @@ def cmd_push(args) -> int:
     check_out(plan_path, "--plan")
     options = _options(args)
     err = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
-    interrupted = False
+    stop = None  # the interrupt (Ctrl-C or SIGTERM) that ended the push
     with c_stdout_silenced():
         try:
             with _executor(args.workers) as executor:
                 result = push(options, executor, progress=err)
         except KeyboardInterrupt as exc:
-            result, interrupted = getattr(exc, "result", None), True
+            result, stop = getattr(exc, "result", None), exc
             if result is None:
-                raise SystemExit(130) from None
+                raise interrupted_exit(exc, "nothing was executed") from None
     record = push_record(result, options)
     try:
         result.trajectory.to_npz(args.out)
@@ -97,8 +99,8 @@ def cmd_push(args) -> int:
           f"{record['simulated_time']:g} s; wrote {args.out} and {plan_path}", file=sys.stderr)
     print(json.dumps({k: record[k] for k in ("reached", "reason", "final_distance", "simulated_time",
                                              "impact_impulse_per_second", "rollouts", "wall_time")}))
-    if interrupted:
-        return 130
+    if stop is not None:
+        return say_interrupted(stop, f"the {record['simulated_time']:g} s executed are in {args.out} and {plan_path}")
     return 0 if result.reached else 1
 
 

@@ -136,8 +136,8 @@ def add_parsers(sub) -> None:
                                    "max_penetration, max_cone_residual, real_time_factor, tau_beyond_limit, "
                                    "contact_force_beyond_bound). A run that left physics (joint torques beyond "
                                    "tau_max with --servo prescribed, or a contact force beyond the bound of A32) "
-                                   "prints one warning line on stderr. A run that fails part-way keeps what was "
-                                   "computed in OUT.failed.npz.")
+                                   "prints one warning line on stderr. A run that fails part-way, or is stopped by "
+                                   "Ctrl-C or SIGTERM, keeps what was computed in OUT.failed.npz.")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--gait", default="C", metavar="NAME", type=gait_name,
                      help="a gait with its default parameters: C (default), S, J, J-mirror (lateral rolling, "

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import json
-import sys
 import time
 
 from ..infra.validation import RULES, ValidationError, check_choice
@@ -15,7 +14,8 @@ def cmd_sweep(args) -> int:
     """Run the sweep on the local cores, print the summary, write every record as JSON; exit status 1
     when a physical scenario fails a check or a scenario raises (``reproduce.sweep.summarize``).
     """
-    from ..infra.executors import default_executor
+    from ..infra.executors import own_pool
+    from ..infra.progress import end_line, rewrite
     from ..reproduce.sweep import format_summary, run_scenario, scenarios, summarize
     from ..step import LAWS
 
@@ -29,15 +29,14 @@ def cmd_sweep(args) -> int:
         raise fail(exc) from None
     todo = scenarios(args.n, args.seed, laws)
     start, records = time.perf_counter(), []
-    with c_stdout_silenced(), default_executor(args.jobs) as pool:
+    # own_pool: on Ctrl-C or SIGTERM the workers end at once
+    with c_stdout_silenced(), own_pool(args.jobs) as pool:
         futures = [pool.submit(run_scenario, s, args.duration) for s in todo]
         for k, future in enumerate(futures):
             records.append(future.result())
             if not args.quiet:
-                sys.stderr.write(f"\rsweep: {k + 1}/{len(todo)} scenarios, {time.perf_counter() - start:.0f} s ")
-                sys.stderr.flush()
-    if not args.quiet:
-        sys.stderr.write("\n")
+                rewrite(f"sweep: {k + 1}/{len(todo)} scenarios, {time.perf_counter() - start:.0f} s ")
+    end_line()
     summary = summarize(records)
     summary.update(seed=args.seed, duration=args.duration, contact=list(laws), seconds=time.perf_counter() - start)
     print(format_summary(summary))

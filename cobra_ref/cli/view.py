@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import sys
 
+from ..infra.output import OutputError
 from ..infra.validation import RULES
 from .common import check_out
 
@@ -71,7 +72,7 @@ def cmd_render(args) -> int:
                               force_scale=args.force_scale)
         info = render_file(traj, args.out, video, at=args.at, renderer=args.renderer,
                            progress=None if args.quiet else progress_printer(f"render {args.out}"))
-    except RenderError as exc:
+    except (RenderError, OutputError) as exc:  # bad input, or a write that failed (a full disk)
         raise SystemExit(f"error: {exc}") from None
     if info["renderer"] == "mujoco":
         where = "" if info["process"] == "this" else " (in a child process: mujoco was imported with another)"

@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
+import threading
+import time
 from contextlib import contextmanager
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 
@@ -82,17 +85,47 @@ def one_blas_thread():
             setter(ctypes.c_int(n))
 
 
-def worker_init() -> None:
+def worker_init(parent: int | None = None) -> None:
     """Pool worker initializer.
 
-    One BLAS thread; Ctrl-C goes to the main process only, which ends the workers; file descriptor 1
-    to /dev/null (OSQP prints "Polishing not needed ..." there even with verbose off, once per
-    solve; the workers print nothing else)."""
+    One BLAS thread; the signals of a helper process (``helper_init``); file descriptor 1 to
+    /dev/null (OSQP prints "Polishing not needed ..." there even with verbose off, once per solve;
+    the workers print nothing else)."""
     limit_blas_threads(1)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    helper_init(parent)
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 1)
     os.close(devnull)
+
+
+def helper_init(parent: int | None = None) -> None:
+    """Initializer of a helper process (a pool worker, the progress queue's server).
+
+    Ctrl-C goes to the main process only, which ends its helpers (SIGINT ignored); SIGTERM ends the
+    helper at once (its default: a forked helper would otherwise inherit the command's handler,
+    ``signals.stop_signals``). With ``parent`` (the main process's id) on Linux the kernel also
+    kills the helper when the main process dies, even by SIGKILL (``prctl(PR_SET_PDEATHSIG)``,
+    bound to the thread that started the helper); a helper whose parent is already gone exits.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if parent is None or not sys.platform.startswith("linux"):
+        return
+    import ctypes
+
+    pr_set_pdeathsig = 1  # <linux/prctl.h>
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, int(signal.SIGKILL), 0, 0, 0)
+    except (OSError, AttributeError):  # no prctl in this C library: no guard
+        return
+    if os.getppid() != parent:
+        os._exit(1)
+
+
+def _main_pid() -> int | None:
+    """This process's id when called from its main thread (the thread that forks the helpers and
+    whose end fires ``helper_init``'s guard), else None (no guard)."""
+    return os.getpid() if threading.current_thread() is threading.main_thread() else None
 
 
 class SerialExecutor(Executor):
@@ -112,9 +145,10 @@ class SerialExecutor(Executor):
 
 def default_executor(workers: int | None = None) -> ProcessPoolExecutor:
     """A process pool on the local cores (``os.cpu_count()`` workers), one BLAS thread per worker,
-    ignoring Ctrl-C (``optimize`` ends them).
+    ignoring Ctrl-C (``optimize`` ends them), ending on SIGTERM and with this process (``worker_init``).
     """
-    return ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1, initializer=worker_init)
+    return ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1, initializer=worker_init,
+                               initargs=(_main_pid(),))
 
 
 @contextmanager
@@ -134,13 +168,42 @@ def own_pool(workers: int | None = None):
 
 
 def shutdown(executor: Executor, interrupted: bool) -> None:
-    """Shut down our own pool; after Ctrl-C, end its worker processes (they ignore SIGINT) at once.
+    """Shut down our own pool; after an interrupt (Ctrl-C, SIGTERM), end its worker processes at
+    once (``end_processes``) instead of waiting for their work.
     """
     if interrupted:
         # the pool's own worker processes (a private attribute of ProcessPoolExecutor)
-        workers = dict(getattr(executor, "_processes", None) or {})
+        workers = list((getattr(executor, "_processes", None) or {}).values())
         executor.shutdown(wait=False, cancel_futures=True)
-        for process in workers.values():
-            process.terminate()
+        end_processes(workers)
     else:
         executor.shutdown(wait=True)
+
+
+def end_processes(processes, grace: float = 3.0) -> None:
+    """SIGTERM each ``multiprocessing`` process, wait ``grace`` seconds in all for them to end, then
+    SIGKILL any still running."""
+    for process in processes:
+        process.terminate()
+    deadline = time.monotonic() + grace
+    for process in processes:
+        process.join(max(deadline - time.monotonic(), 0.0))
+    for process in processes:
+        if process.is_alive():
+            process.kill()
+            process.join(1.0)
+
+
+@contextmanager
+def progress_queue():
+    """A queue that pool workers can put on and this process read, for a ``with`` block: a
+    ``multiprocessing`` manager's, whose server process is a helper (``helper_init``) shut down on
+    leaving the block (at most about a second, then ended)."""
+    from multiprocessing.managers import SyncManager
+
+    manager = SyncManager()
+    manager.start(helper_init, (_main_pid(),))
+    try:
+        yield manager.Queue()
+    finally:
+        manager.shutdown()

@@ -16,7 +16,9 @@ bench JSON, the figures):
   be created, by a real probe (a temporary file created and removed: ``os.access`` answers "yes"
   for root even on a read-only file system).
 
-Failures raise ``OutputError`` (an ``OSError``) with a message that names the path and the problem.
+Failures raise ``OutputError`` (an ``OSError``) with a message that names the path and the problem:
+also a write that fails late (a full disk, a quota, an I/O error), whose message adds the
+system's reason and that the previous file is unchanged.
 """
 
 from __future__ import annotations
@@ -124,8 +126,22 @@ def atomic_write(path, write, what: str = "output") -> None:
             raise OutputError(f"the writer of {what} {path!r} did not write the file under its name "
                               f"(it wrote: {made}); nothing was replaced")
         os.replace(tmp, target)
+    except OutputError:
+        raise
+    except OSError as exc:  # a full disk, a quota, an I/O error: while writing or renaming
+        raise write_error(path, what, exc) from exc
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+
+
+def write_error(path, what: str, exc: OSError) -> OutputError:
+    """The ``OutputError`` of a write that failed with ``exc``: one line naming the file, the
+    system's reason and that the file as it was is kept (the writes are atomic).
+    """
+    # the system's reason; a writer's own message (ffmpeg's, over many lines) by its first line
+    cause = exc.strerror or next(iter(str(exc).strip().splitlines()), "") or type(exc).__name__
+    kept = "its previous content is unchanged" if os.path.lexists(path) else "nothing was written"
+    return OutputError(f"cannot write {what} {os.fspath(path)!r}: {cause}; {kept}")
 
 
 def write_text(path, text: str, what: str = "output") -> None:

@@ -5,6 +5,25 @@ from __future__ import annotations
 import sys
 import time
 
+# whether the last thing written to stderr is a progress line without its end (``rewrite``)
+_open = {"line": False}
+
+
+def rewrite(text: str) -> None:
+    """Rewrite the progress line in place ("\\r" + text, no newline) on stderr."""
+    sys.stderr.write("\r" + text)
+    sys.stderr.flush()
+    _open["line"] = True
+
+
+def end_line() -> None:
+    """End the progress line that ``rewrite`` left open, if any, so the next message starts on a
+    line of its own."""
+    if _open["line"]:
+        sys.stderr.write("\n")
+        sys.stderr.flush()
+        _open["line"] = False
+
 
 def progress_printer(label: str):
     """A ``progress(done, total)`` callback that rewrites one stderr line: label, percentage,
@@ -17,10 +36,8 @@ def progress_printer(label: str):
     def show(done: int, total: int) -> None:
         elapsed = time.perf_counter() - start
         left = elapsed / done * (total - done)
-        sys.stderr.write(f"\r{label}: {100 * done / total:5.1f} % ({done}/{total} steps), "
-                         f"{left:5.0f} s left ")
+        rewrite(f"{label}: {100 * done / total:5.1f} % ({done}/{total} steps), {left:5.0f} s left ")
         if done == total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
+            end_line()
 
     return show

@@ -2,17 +2,19 @@
 
 The wing is read in this order: ``problem`` (decision vector, bounds, goal, the common start, one
 rollout), ``cost`` (the cost of a rollout), ``search`` (compass search or differential evolution,
-run on any executor), ``results`` (the params JSON and its replay).
+run on any executor), ``results`` (the params JSON and its replay), ``checkpoint`` (the params
+JSON written as the search goes).
 """
 
 from ..infra.executors import SerialExecutor
 from .cost import evaluate, shooting_cost
 from .problem import (DECISION, DEFAULTS, DecisionSpace, ShootingError, ShootingProblem, Weights, make_problem,
                       middle_pose, rollout, start_state)
+from .checkpoint import Checkpoint
 from .results import load_result, problem_from_dict, problem_to_dict, replay, write_result
 from .search import SearchOptions, compass_search, differential_evolution_search, optimize, optimize_gait
 
-__all__ = ["DECISION", "DEFAULTS", "DecisionSpace", "SearchOptions", "SerialExecutor", "ShootingError",
+__all__ = ["Checkpoint", "DECISION", "DEFAULTS", "DecisionSpace", "SearchOptions", "SerialExecutor", "ShootingError",
            "ShootingProblem", "Weights", "compass_search", "differential_evolution_search", "evaluate", "load_result",
            "make_problem", "middle_pose", "optimize", "optimize_gait", "problem_from_dict", "problem_to_dict",
            "replay", "rollout", "shooting_cost", "start_state", "write_result"]

@@ -79,7 +79,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..gaits import GaitError, gait, gait_params
-from ..infra.validation import DEFAULT_DT
+from ..infra import arguments
+from ..infra.rule import Rule
+from ..infra.validation import DEFAULT_DT, number_text
 from ..kinematics import forward_kinematics
 from ..params import CobraParameters
 from ..quaternion import quat_mul
@@ -111,10 +113,11 @@ MAX_BOX_SPEED = 0.5  # [m/s] reachability bound (module docstring)
 MAX_GOAL_DISTANCE = 5.0  # [m]
 MIN_GOAL_DISTANCE = 1e-3  # [m]
 FAILED_COST = 1e3  # cost of a rollout whose simulation failed
+HORIZON = Rule("duration", "s", 0.0, low_open=True)  # check_goal's duration; make_problem's: validation.step_count
 FORMAT = "cobra-ref optimize v1"
 
 
-class ShootingError(ValueError):
+class ShootingError(arguments.ArgumentError):
     """Bad input to the shooting problem or a malformed params JSON (the message says which)."""
 
 
@@ -139,6 +142,11 @@ class Weights:
     tau: float = 1.0
     q: float = 1.0
 
+    def __post_init__(self):
+        """Each weight by the rule of the params JSON (``RULES["weight"]``: finite, in [0, 1e6])."""
+        for name in self.__dataclass_fields__:
+            arguments.number(f"weights.{name}", getattr(self, name), "weight", ShootingError)
+
 
 @dataclass(frozen=True)
 class DecisionSpace:
@@ -152,6 +160,17 @@ class DecisionSpace:
     bounds: dict | None = None
     x0: dict | None = None
     ramp_time: float = RAMP_TIME
+
+    def __post_init__(self):
+        """Each field of its kind: ``names`` a sequence of names (one name alone is refused: a str is
+        a sequence of letters), ``bounds`` and ``x0`` dicts, ``ramp_time`` by ``RULES["ramp_time"]``
+        (the command line's --ramp-time)."""
+        if isinstance(self.names, str):
+            raise arguments.ArgumentTypeError(f"space.names = {self.names!r} is one str, not a sequence of names "
+                                              f"(allowed: a tuple of names, e.g. ({self.names!r},))")
+        for name in ("bounds", "x0"):
+            arguments.instance(f"space.{name}", getattr(self, name), dict, "{'frequency': ...}", optional=True)
+        arguments.number("space.ramp_time", self.ramp_time, "ramp_time", ShootingError)
 
 
 @dataclass(frozen=True)
@@ -202,30 +221,29 @@ def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, setti
     torque above tau_max is penalised); ``space``: the decision vector (``DecisionSpace``);
     ``cobra``: the model's parameters (default ``CobraParameters()``); ``box_gap``: the gap between
     the box and the middle link at the start (``start.initial_state``, assumption A9: 5 cm).
-    Raises ``ShootingError`` for an unknown gait, settings that are not a StepSettings, a goal
-    that is not two finite numbers or is unreachable, bounds that are empty or exclude the initial
-    guess, or values the gait rejects. Sidewinding runs one box-free simulation
+    Checks every argument by the command line's rules (``infra.arguments``): an
+    ``ArgumentTypeError`` (a TypeError) for an argument of the wrong type (settings that are not a
+    StepSettings, weights that are not Weights, a duration that is not a number); a
+    ``ShootingError`` (an ``ArgumentError``, a ValueError) for an unknown gait, a horizon of more
+    than 10^6 steps (``validation.step_count``), a weight outside ``RULES["weight"]``, a box_gap
+    outside ``RULES["box_gap"]``, a goal that is not two finite numbers or is unreachable, bounds
+    that are empty or exclude the initial guess, or values the gait rejects. Sidewinding runs one box-free simulation
     (``placement.travel_placement``) to place the box.
     """
-    if gait_name not in DECISION:
-        raise ShootingError(f"unknown gait {gait_name!r}; gaits: {', '.join(DECISION)}")
+    arguments.choice("gait_name", gait_name, tuple(DECISION), ShootingError)
     settings = StepSettings(dt=DEFAULT_DT) if settings is None else settings
-    if not isinstance(settings, StepSettings):
-        raise ShootingError(f"settings must be a StepSettings, got {type(settings).__name__}")
+    arguments.instance("settings", settings, StepSettings, "StepSettings(dt=0.001)")
     cobra = CobraParameters() if cobra is None else cobra
-    if not isinstance(cobra, CobraParameters):
-        raise ShootingError(f"cobra must be a CobraParameters, got {type(cobra).__name__}")
-    if not (np.isfinite(duration) and duration > 0):
-        raise ShootingError(f"duration must be positive and finite, got {duration}")
-    if not settings.dt <= duration:
-        raise ShootingError(f"dt must be <= duration, got dt = {settings.dt} and duration = {duration}")
+    arguments.instance("cobra", cobra, CobraParameters, "CobraParameters()")
+    arguments.instance("space", space, DecisionSpace, "DecisionSpace(names=('frequency',))")
+    arguments.instance("weights", weights, Weights, "Weights(goal=10.0)")
+    arguments.duration_steps(duration, settings.dt, error=ShootingError)  # the command line's step-count rule
+    box_gap = arguments.number("box_gap", box_gap, "box_gap", ShootingError)
     goal = check_goal(goal, duration)
     names, lower, upper = _decision(gait_name, space.bounds, space.names)
     guess = _initial_guess(gait_name, names, lower, upper, space.x0, space.ramp_time)
     x_guess = tuple(guess.pop(n) for n in names)
     ref = gait(gait_name, **guess, **dict(zip(names, x_guess)))
-    if not (np.isfinite(box_gap) and box_gap >= 0):
-        raise ShootingError(f"box_gap must be finite and >= 0, got {box_gap}")
     box_pose0, middle0, direction = _box_placement(gait_name, ref, settings, cobra, box_gap)
     return ShootingProblem(gait_name, goal, float(duration), names, lower, upper, x_guess,
                            tuple(sorted(guess.items())), weights, box_pose0, middle0, direction, settings, cobra)
@@ -234,23 +252,21 @@ def make_problem(gait_name: str, goal, duration: float = DEFAULT_DURATION, setti
 def check_goal(goal, duration: float) -> tuple:
     """The goal as (dx, dy) floats, or a ShootingError: not two finite numbers, closer than 1 mm,
     or unreachable (farther than MAX_BOX_SPEED * duration or MAX_GOAL_DISTANCE): the goal's input
-    check (module docstring).
+    check (module docstring). ``duration`` [s] finite and > 0 (``HORIZON``);
+    a goal or duration that is not made of numbers: an ``infra.arguments.ArgumentTypeError``.
     """
-    try:
-        g = np.asarray(goal, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ShootingError(f"goal must be two numbers (dx, dy) in metres, got {goal!r}") from None
-    if g.shape != (2,) or not np.all(np.isfinite(g)):
-        raise ShootingError(f"goal must be two finite numbers (dx, dy) in metres, got {goal!r}")
+    duration = arguments.number("duration", duration, HORIZON, ShootingError)
+    g = arguments.numbers("goal", goal, 2, "goal", ("X", "Y"), ShootingError)
     d, reach = float(np.hypot(*g)), min(MAX_BOX_SPEED * duration, MAX_GOAL_DISTANCE)
+    where, n = f"goal = ({number_text(g[0])}, {number_text(g[1])}) m", lambda x: number_text(float(f"{x:.3g}"))
     if d < MIN_GOAL_DISTANCE:
-        raise ShootingError(f"goal {tuple(g)} is where the box starts (closer than {MIN_GOAL_DISTANCE} m)")
+        raise ShootingError(f"{where} is where the box starts (closer than {n(MIN_GOAL_DISTANCE)} m)")
     if d > reach:
-        raise ShootingError(f"goal {tuple(g)} is unreachable: {d:.3f} m from the box's start, but in "
-                            f"{duration} s the robot can push it at most {reach:.3f} m "
-                            f"({MAX_BOX_SPEED} m/s, at most {MAX_GOAL_DISTANCE} m); "
-                            "use a closer goal or a longer --duration")
-    return float(g[0]), float(g[1])
+        raise ShootingError(f"{where} is unreachable: {n(d)} m from the box's start, but in "
+                            f"{number_text(duration)} s the robot can push it at most {n(reach)} m "
+                            f"({n(MAX_BOX_SPEED)} m/s, at most {n(MAX_GOAL_DISTANCE)} m); "
+                            "use a closer goal or a longer duration")
+    return g
 
 
 def _decision(gait_name: str, bounds, decision) -> tuple:
@@ -375,8 +391,13 @@ def rollout(problem: ShootingProblem, x, progress=None) -> Trajectory:
     """One rollout: simulate candidate x over the horizon from the common initial state.
 
     Implements: the "shooting" of [COBRA] sec. "Results": one simulation per u_ref.
-    Raises ``SimulationError`` as ``simulate`` does.
+    ``x`` holds one finite number per decision parameter (``problem.names``), else a
+    ``ShootingError`` (an ``ArgumentTypeError`` for values that are not numbers); raises
+    ``SimulationError`` as ``simulate`` does.
     """
+    arguments.instance("problem", problem, ShootingProblem, "make_problem('C', (0.1, 0.0))")
+    x = arguments.numbers("x", x, len(problem.names), labels=problem.names, error=ShootingError)
+    arguments.function("progress", progress, "a function progress(done, total)", optional=True)
     model = cobra_model(problem.cobra)
     q0, qd0 = start_state(problem, x, model)
     with warnings.catch_warnings():  # a rollout's excess torque is the cost's tau_limit term, not news

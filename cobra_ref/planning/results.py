@@ -209,7 +209,8 @@ def transfer(problem: ShootingProblem, x, plan_entry: dict | None = None, check_
 
 
 def result_to_dict(result: ShootingResult) -> dict:
-    """The params JSON: ``params`` (the optimum), ``history``, and every setting to re-run it.
+    """The params JSON: ``params`` (the optimum), ``history``, and every setting to re-run it;
+    ``"checkpoint": true`` when it holds the rollouts so far of a search still running.
     """
     best = result.best
     path = best.get("box_path")
@@ -219,6 +220,7 @@ def result_to_dict(result: ShootingResult) -> dict:
             "box_path": None if path is None else {"dt": BOX_PATH_DT, "xy": np.asarray(path, dtype=float).tolist()},
             "contact": best.get("contact"),
             "interrupted": result.interrupted, "message": result.message,
+            **({"checkpoint": True} if result.checkpoint else {}),
             "settings": problem_to_dict(result.problem),
             "optimizer": {"method": result.method, "seed": result.seed, "maxiter": result.maxiter,
                           "iterations": result.iterations, "rollouts": len(result.history), **result.options},
@@ -259,7 +261,7 @@ def write_result(result: ShootingResult, path: str) -> dict:
             json.dump(record, f, indent=1, allow_nan=False)
             f.write("\n")
 
-    atomic_write(path, write)
+    atomic_write(path, write, "params JSON")
     return record
 
 

@@ -16,10 +16,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..infra.executors import default_executor, shutdown
+from ..infra.signals import signal_name
 from ..gaits import gait_params
 from .cost import cost_without_impact, evaluate
 from .problem import DEFAULT_MAXITER, DEFAULTS, ShootingError, ShootingProblem, make_problem
-from .results import CHECK_DT, transfer, write_result
+from .checkpoint import Checkpoint
+from .results import CHECK_DT, transfer
 
 
 @dataclass
@@ -42,6 +44,7 @@ class ShootingResult:
     wall_time: float
     transfer: dict | None = None  # results.transfer of the optimum, when checked (optimize_gait)
     without_impact: dict | None = None  # the rollout of least J - w_I I (optimize's companion search)
+    checkpoint: bool = False  # the rollouts so far of a search still running (optimize's ``checkpoint``)
 
     @property
     def params(self) -> dict:
@@ -66,6 +69,7 @@ class _Evaluations:
         self.width = max(int(width), 1)  # rollouts that run at once
         self.rollout_seconds = None  # the wall time of one rollout, measured on the first batch
         self.after_first = None  # a callable(rollout_seconds) -> line, said after the first batch
+        self.after_batch = None  # a callable() called once each batch is in the history
 
     def best(self, cost=lambda e: e["cost"]) -> dict | None:
         """The history entry of least ``cost`` (default J; the first of equals)."""
@@ -112,6 +116,8 @@ class _Evaluations:
         if self.progress:
             self.progress(self._line(entries))
         self.iteration += 1
+        if self.after_batch is not None:
+            self.after_batch()
 
     def _line(self, entries) -> str:
         it, b, best = self.iteration, min(entries, key=lambda e: e["cost"]), self.best()
@@ -196,7 +202,7 @@ class SearchOptions:
 
 
 def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), executor: Executor | None = None,
-             progress=None, workers: int | None = None) -> ShootingResult:
+             progress=None, workers: int | None = None, checkpoint=None) -> ShootingResult:
     """Minimise J(p) over the bounds from ``problem.x0``; every rollout goes through ``executor``.
 
     Implements: the single-shooting optimizer (derivative-free, bounded, deterministic).
@@ -229,16 +235,23 @@ def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), 
     ``executor``: any ``concurrent.futures.Executor`` whose workers can import cobra_ref; default
     ``default_executor(workers)``, a process pool on the local cores, shut down at the end.
     ``progress``: a callable taking one line of text per iteration (the CLI prints it on stderr).
+    ``checkpoint``: a callable taking a ``ShootingResult`` of every rollout so far (``checkpoint``
+    true), called after each batch: the CLI writes it to the params JSON as the search goes.
     Ctrl-C (KeyboardInterrupt) stops the search and returns the best rollout found so far with
-    ``interrupted=True``. The result is the same for any executor (the rollouts are deterministic
-    and each batch is collected in order).
+    ``interrupted=True`` (before any rollout finished, the KeyboardInterrupt goes on). The result
+    is the same for any executor (the rollouts are deterministic and each batch is collected in
+    order).
     """
     own = executor is None
     executor = default_executor(workers) if own else executor
     evals = _Evaluations(problem, executor, progress, search.maxiter, _width(executor, workers if own else None))
-    interrupted, message = False, ""
+    stop, message = None, ""  # stop: the interrupt that ended the search early
     run = _compass_search if search.method == "pattern" else _differential_evolution
     companion = search.companion and problem.weights.impact > 0
+    iterations = 0
+    if checkpoint is not None:
+        evals.after_batch = lambda: checkpoint(_result(problem, search, evals, iterations, False, (
+            f"checkpoint after {len(evals.history)} rollouts: the search was still running"), checkpoint=True))
     try:
         _announce(problem, search, evals, 2 if companion else 1)
         message = run(problem, evals, search)
@@ -247,20 +260,29 @@ def optimize(problem: ShootingProblem, search: SearchOptions = SearchOptions(), 
             _announce_companion(problem, search, evals)
             evals.label, evals.search, evals.iteration = "without the impact term: ", "J - w_I I", 0
             message += "; without the impact term: " + run(problem, evals.without_impact, search)
-    except KeyboardInterrupt:
-        interrupted, message = True, "interrupted (Ctrl-C): the best rollout so far is kept"
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM under the command line (signals.Terminated)
+        stop, message = exc, f"interrupted ({signal_name(exc)}): the best rollout so far is kept"
     finally:
         if own:
-            shutdown(executor, interrupted)
-    if not evals.history:
-        raise ShootingError("interrupted before any rollout finished: nothing to keep")
+            shutdown(executor, stop is not None)
+    if not evals.history:  # interrupted before any rollout finished: nothing to keep
+        raise stop if stop is not None else ShootingError("no rollout finished")
+    return _result(problem, search, evals, iterations, stop is not None, message)
+
+
+def _result(problem: ShootingProblem, search: SearchOptions, evals: _Evaluations, iterations: int,
+            interrupted: bool, message: str, checkpoint: bool = False) -> ShootingResult:
+    """The ``ShootingResult`` of the rollouts in ``evals`` (``checkpoint``: of a search still
+    running). ``iterations``: those of the search of J once it has ended (while it runs, its own
+    count)."""
     iterations = evals.iteration if evals.search == "J" else iterations
     unpenalized = evals.best(lambda e: cost_without_impact(problem, e)) if evals.search != "J" else None
     options = {"step": search.step, "min_step": search.min_step, "popsize": search.popsize,
                "companion": evals.search != "J"}
-    return ShootingResult(problem, search.method, search.seed, int(search.maxiter), options, evals.history,
+    return ShootingResult(problem, search.method, search.seed, int(search.maxiter), options, list(evals.history),
                           evals.best(), max(iterations - 1, 0), interrupted, message,
-                          time.perf_counter() - evals.start, without_impact=unpenalized)
+                          time.perf_counter() - evals.start, without_impact=unpenalized,
+                          checkpoint=checkpoint)
 
 
 def _width(executor: Executor, workers: int | None) -> int:
@@ -348,8 +370,10 @@ def optimize_gait(name: str, goal=None, out: str | None = None, executor: Execut
                   **problem_options) -> ShootingResult:
     """Optimize one gait at its defaults (``DEFAULTS[name]``: goal, horizon and maxiter, unless
     given), check the optimum at ``check_dt`` (``results.transfer``; None = no check) and write the
-    params JSON to ``out`` (default ``optimized/<name>.json``; "" = do not write): what
-    ``cobra-ref figures --reoptimize`` runs per gait.
+    params JSON to ``out`` (default ``optimized/<name>.json``; "" = do not write), after every
+    batch of rollouts too (``checkpoint.Checkpoint``): what ``cobra-ref figures --reoptimize`` runs
+    per gait. An ``OutputError`` names the file and where the result is kept when ``out`` cannot
+    be written at the end.
 
     ``progress`` defaults to lines on stderr; ``search``: ``SearchOptions`` (default: the gait's
     maxiter); ``problem_options`` go to ``make_problem`` (duration, settings, space, weights, cobra,
@@ -360,7 +384,12 @@ def optimize_gait(name: str, goal=None, out: str | None = None, executor: Execut
     problem = make_problem(name, d_goal if goal is None else goal, **problem_options)
     if progress is None:
         progress = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
-    result = optimize(problem, SearchOptions(maxiter=d_maxiter) if search is None else search, executor, progress)
+    out = os.path.join("optimized", f"{name}.json") if out is None else out
+    if out:
+        os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+    keeper = Checkpoint(out, progress) if out else None
+    result = optimize(problem, SearchOptions(maxiter=d_maxiter) if search is None else search, executor, progress,
+                      checkpoint=keeper)
     if check_dt is not None and result.best["terms"] is not None:
         x = [result.best["params"][n] for n in problem.names]
         result.transfer = transfer(problem, x, result.best, check_dt)
@@ -369,8 +398,6 @@ def optimize_gait(name: str, goal=None, out: str | None = None, executor: Execut
                  + ("failed: " + t["check_error"] if t["check_error"] else
                     f"{t['check_distance_to_goal']:.4f} m (check); impact impulse "
                     f"{t['plan_impact_impulse_per_s']:.4g} -> {t['check_impact_impulse_per_s']:.4g} N s/s"))
-    out = os.path.join("optimized", f"{name}.json") if out is None else out
-    if out:
-        os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
-        write_result(result, out)
+    if keeper is not None:
+        keeper.final(result)
     return result

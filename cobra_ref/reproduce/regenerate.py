@@ -249,9 +249,9 @@ def regenerate(out_dir: str = "figures", options: FiguresOptions = FiguresOption
                   f"member 0 {every[0].duration:g} s, the others {window(options.quick):g} s (cache: {cache_dir})")
     runs = run_all(every, cache_dir, force=options.force, workers=workers, progress=progress, executor=executor)
     job = FiguresJob(options, out_dir, cache_dir, optimized_dir, progress, specs, runs, files_opt, params, start)
-    # the MuJoCo comparison and the optima's replays run on the executor (default: a process pool)
-    # while this process draws the figures
-    with nullcontext(executor) if executor is not None else own_pool() as side:
+    # the MuJoCo comparison and the optima's replays run on the executor (default: a process pool of
+    # ``workers``, ended at once on an interrupt) while this process draws the figures
+    with nullcontext(executor) if executor is not None else own_pool(workers) as side:
         return _finish(job, side)
 
 

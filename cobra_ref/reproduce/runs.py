@@ -37,16 +37,17 @@ import json
 import os
 import sys
 import time
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import asdict, dataclass, field, replace
 
 
 from ..provenance import __version__, physics_hash
 from ..gaits import gait, gait_params
-from ..infra.executors import worker_init
+from ..infra.executors import own_pool, progress_queue
+from ..infra.output import write_error
 from ..params import CobraParameters
 from ..placement import TravelPlacement, travel_placement
-from ..infra.progress import progress_printer
+from ..infra.progress import end_line, progress_printer, rewrite
 from ..infra.validation import DEFAULT_DT
 from ..robots import cobra_model
 from ..simulate import simulate
@@ -177,10 +178,16 @@ def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Traject
 
 def store(spec: RunSpec, cache_dir: str, traj: Trajectory, failed: bool) -> str:
     """Write ``traj`` to the cache (``<name>.npz``, or ``<name>.failed.npz`` for a failed run); return the path.
+
+    An ``OutputError`` names the file and the reason when it cannot be written (a full disk); the
+    entries stored before are kept.
     """
     path = os.path.join(cache_dir, spec.filename())
     out = path[:-4] + ".failed.npz" if failed else path
-    os.makedirs(cache_dir, exist_ok=True)
+    try:
+        os.makedirs(cache_dir, exist_ok=True)
+    except OSError as exc:
+        raise write_error(out, "cache entry", exc) from None
     traj.to_npz(out)
     return out
 
@@ -225,25 +232,34 @@ def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = No
     specs = list(specs)
     todo = list(dict.fromkeys(s for s in specs if force or not cached_path(s, cache_dir)))
     todo.sort(key=lambda s: -s.duration)  # the longest runs first: no core waits alone for one at the end
-    if todo:
-        workers = workers or min(len(todo), os.cpu_count() or 1)
-        if executor is not None:
-            _run_on(executor, todo, cache_dir, progress, None)
-        elif workers > 1 and len(todo) > 1:
-            import multiprocessing
-
-            with multiprocessing.Manager() as manager:
-                queue = manager.Queue()
-                with ProcessPoolExecutor(min(workers, len(todo)), initializer=worker_init) as pool:
-                    _run_on(pool, todo, cache_dir, progress, queue)
-        else:
-            for i, s in enumerate(todo):
-                label = f"  run {i + 1}/{len(todo)} {s.label()}"
-                store(s, cache_dir, *simulate_spec(s, progress_printer(label) if progress else None))
+    stored = []  # the cache files written by this call
+    try:
+        _run_todo(todo, cache_dir, workers, progress, executor, stored)
+    except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: say what was kept (cli.figures)
+        exc.kept = {"stored": list(stored), "todo": len(todo), "cache_dir": cache_dir}
+        raise
     return {s: run(s, cache_dir)[0] for s in specs}
 
 
-def _run_on(executor, todo, cache_dir: str, progress: bool, queue) -> None:
+def _run_todo(todo, cache_dir: str, workers, progress: bool, executor, stored: list) -> None:
+    """Simulate every spec of ``todo`` and store it (``run_all``'s executors), appending each
+    cache file written to ``stored``."""
+    if not todo:
+        return
+    workers = workers or min(len(todo), os.cpu_count() or 1)
+    if executor is not None:
+        _run_on(executor, todo, cache_dir, progress, None, stored)
+    elif workers > 1 and len(todo) > 1:
+        # the workers and the progress queue's server end at once on an interrupt (executors)
+        with progress_queue() as queue, own_pool(min(workers, len(todo))) as pool:
+            _run_on(pool, todo, cache_dir, progress, queue, stored)
+    else:
+        for i, s in enumerate(todo):
+            label = f"  run {i + 1}/{len(todo)} {s.label()}"
+            stored.append(store(s, cache_dir, *simulate_spec(s, progress_printer(label) if progress else None)))
+
+
+def _run_on(executor, todo, cache_dir: str, progress: bool, queue, stored: list) -> None:
     """Submit every spec of ``todo`` to ``executor``, store each result as it completes, report progress.
 
     Sidewinding's members wait for their nominal run when it is in ``todo`` too, and start from
@@ -260,7 +276,7 @@ def _run_on(executor, todo, cache_dir: str, progress: bool, queue) -> None:
             for f in done:
                 spec = futures[f]
                 traj, failed = f.result()  # re-raises a run's exception here
-                store(spec, cache_dir, traj, failed)
+                stored.append(store(spec, cache_dir, traj, failed))
                 watcher.completed(spec)
                 # the members of a nominal run that has just recorded its placement go now
                 ready = [s for s in held if replace(s, member=None) == spec]
@@ -289,8 +305,14 @@ class _Progress:
         self.state = {}  # label: (steps done, steps total) of the running runs
 
     def _write(self, text: str, newline: bool) -> None:
-        if self.progress:
-            sys.stderr.write(("\r" if self.tty else "") + text + (" " if self.tty and not newline else "\n"))
+        if not self.progress:
+            return
+        if self.tty:  # one line rewritten in place (progress.rewrite), ended after a completed run
+            rewrite(text + " ")
+            if newline:
+                end_line()
+        else:
+            sys.stderr.write(text + "\n")
             sys.stderr.flush()
 
     def completed(self, spec) -> None:

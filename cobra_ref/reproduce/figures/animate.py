@@ -34,7 +34,7 @@ import time
 import numpy as np
 from matplotlib.animation import FuncAnimation, PillowWriter
 
-from ...infra.output import write_text
+from ...infra.output import OutputError, write_text
 from ...viz.drawing import draw_scene, is_mirrored, scene_limits
 from . import common
 
@@ -141,6 +141,8 @@ def animate_one(model, gait: str, traj, path: str, problem: str | None) -> dict:
     if problem is None:
         try:
             record = mujoco_gif(gait, traj, path)
+        except OutputError:  # the GIF cannot be written (a full disk): no other renderer would write it
+            raise
         except Exception as exc:  # RenderError, or an OpenGL failure mid-way: the GIF is still made
             problem = f"MuJoCo rendering failed: {type(exc).__name__}: {exc}"
     if problem is not None:
