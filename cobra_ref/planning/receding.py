@@ -6,10 +6,11 @@ period T_p (``PushOptions.period``), from the state the run has reached (the pla
 stepper's memory and the plan so far):
 
 1. candidates (``candidates``): pairs of primitives (:mod:`cobra_ref.planning.primitives`), one
-   for each of the next two periods: the last choice continued (the warm start), the last choice
-   then a stop, a stop, each rolling family at the last choice's amplitude and frequency, and
-   ``samples`` copies of the last choice with Gaussian noise on amplitude, frequency and taper
-   (predictive sampling; the noise from a generator seeded by ``seed`` and the period's index);
+   for each of the next two periods: the last moving choice continued (the warm start), the same
+   then a stop, a stop (only with the box within ``NEAR`` of the target), each rolling family at
+   the last choice's amplitude and frequency, and ``samples`` copies of the last choice with
+   Gaussian noise on amplitude, frequency and taper (predictive sampling; the noise from a
+   generator seeded by ``seed`` and the period's index);
 2. each candidate is rolled out over the horizon from that state (through the executor), and
    costs, in metres (``candidate_cost``)::
 
@@ -43,6 +44,7 @@ from .cost import impact_term, robot_weight
 from .primitives import ROLLING, PlanReference, Primitive
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
+NEAR = 0.05  # [m] a stop for the whole horizon is a candidate only with the box this near its target
 
 
 @dataclass(frozen=True)
@@ -66,11 +68,12 @@ class PushOptions:
     w_tau: float = 0.1  # [m] per unit of P_tau
 
 
-def candidates(last: Primitive, rng: np.random.Generator, samples: int) -> list:
-    """The candidate pairs (first period, second period) of one re-plan (module docstring)."""
-    moving = last if last.family != "stop" else Primitive("C", 0.5, 0.5)
+def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: bool = True) -> list:
+    """The candidate pairs (first period, second period) of one re-plan from the last moving
+    primitive ``moving`` (module docstring); a stop for both periods only when the box is ``near``
+    its goal (far from it, standing still would always be a safe choice and the push would stall)."""
     stop = Primitive("stop")
-    out = [(moving, moving), (moving, stop), (stop, stop)]
+    out = [(moving, moving), (moving, stop)] + ([(stop, stop)] if near else [])
     out += [(p, p) for p in (replace(moving, family=f) for f in ROLLING) if p != moving]
     for _ in range(samples):
         noisy = _perturbed(moving, rng)
@@ -155,21 +158,28 @@ def push(options: PushOptions, executor=None, progress=None) -> PushResult:
     n_period = int(round(o.period / o.settings.dt))
     n_budget = int(round(o.budget / o.period))
     run = Run(model, o.settings, q0, qd0, "fast", n_period * n_budget)
-    cycles, last, aim, start, reason, reached = [], o.start, 0, time.perf_counter(), "budget spent", False
+    cycles, last, moving, aim = [], o.start, o.start, 0
+    start, reason, reached = time.perf_counter(), "budget spent", False
+
+    def distance() -> float:  # the box centre to the current target [m]
+        return float(np.linalg.norm(run.q[box:box + 2] - np.asarray(targets[aim])))
+
     try:
         for k in range(n_budget):
-            t, rng = run.t, np.random.default_rng([o.seed, k])
-            pairs = candidates(last, rng, o.samples)
-            jobs = [Rollout(plan.to_dict(), pair, t, run.q, run.qd, run.stepping.memory, targets[aim], o) for pair in pairs]
-            results = list(executor.map(candidate_cost, jobs)) if executor is not None else [candidate_cost(j) for j in jobs]
+            t = run.t
+            pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=distance() <= NEAR)
+            results = _rollouts(executor, plan, run, pairs, targets[aim], o)
             best = int(np.argmin([r["cost"] for r in results]))
             last = pairs[best][0]
+            moving = last if last.family != "stop" else moving
             plan.extend(last, t)
             run.advance(plan, n_period)
-            d = float(np.linalg.norm(run.q[box:box + 2] - np.asarray(targets[aim])))
+            d = distance()
             cycles.append({"t": t, "chosen": last.to_dict(), "predicted_cost": results[best]["cost"],
-                           "distance": d, "target": list(targets[aim]), "rollouts": len(jobs),
-                           "wall_time": time.perf_counter() - start})
+                           "distance": d, "target": list(targets[aim]), "rollouts": len(pairs),
+                           "wall_time": time.perf_counter() - start,
+                           "candidates": [{"pair": [_name(p) for p in pair], "cost": r["cost"],
+                                           "distance": r["distance"]} for pair, r in zip(pairs, results)]})
             if progress is not None:
                 progress(f"t = {run.t:5.1f} s  {_name(last):<28} box {100 * d:6.2f} cm from "
                          f"{'the goal' if aim == len(targets) - 1 else f'waypoint {aim + 1}'}")
@@ -183,6 +193,13 @@ def push(options: PushOptions, executor=None, progress=None) -> PushResult:
                                 time.perf_counter() - start)
         raise
     return PushResult(run.finish(), plan, cycles, targets[-1], reached, reason, time.perf_counter() - start)
+
+
+def _rollouts(executor, plan: PlanReference, run: Run, pairs: list, target, options: PushOptions) -> list:
+    """``candidate_cost`` of every pair from the state ``run`` has reached, in order (through ``executor``)."""
+    jobs = [Rollout(plan.to_dict(), pair, run.t, run.q, run.qd, run.stepping.memory, target, options)
+            for pair in pairs]
+    return list(executor.map(candidate_cost, jobs)) if executor is not None else [candidate_cost(j) for j in jobs]
 
 
 def _name(p: Primitive) -> str:
