@@ -97,3 +97,13 @@ def test_a_plan_must_move_forward_in_time():
         plan.extend(Primitive("C"), 3.0)
     with pytest.raises(PrimitiveError, match="start shape"):
         PlanReference(Primitive("stop"))
+
+
+def test_a_negative_frequency_rolls_the_same_shape_the_other_way():
+    # phi -> -phi: cos is even, sin is odd, so the yaw joints are the forward run's, the pitch joints negated
+    forward, back = PlanReference(), PlanReference()
+    forward.extend(Primitive("C", 0.5, 0.5), 0.0)
+    back.extend(Primitive("C", 0.5, -0.5), 0.0)
+    for t in (0.3, 1.1):
+        np.testing.assert_allclose(back(t)[0][YAW], forward(t)[0][YAW], atol=1e-15)
+        np.testing.assert_allclose(back(t)[0][~YAW], -forward(t)[0][~YAW], atol=1e-15)

@@ -11,7 +11,7 @@ from cobra_ref.planning.primitives import Primitive
 from cobra_ref.planning.receding import PushOptions, candidate_cost, candidates, push, replay
 from cobra_ref.step import StepSettings
 
-# two periods of 0.1 s at dt = 2 ms, one period ahead, one noisy sample: 8 rollouts of 50 steps per re-plan
+# two periods of 0.1 s at dt = 2 ms, one period ahead, one noisy sample: 10 rollouts of 50 steps per re-plan
 TINY = PushOptions(goal=(0.05, 0.0), period=0.1, horizon=1, budget=0.2, samples=1,
                    settings=StepSettings(dt=0.002))
 
@@ -22,18 +22,22 @@ def pushed():
 
 
 def test_the_candidates_of_a_replan():
-    # the last choice continued, then stopped, a stop, the four other rolling shapes, the samples
+    # the last choice continued, then stopped, rolled back (then on), a stop near the goal, the four
+    # other rolling shapes, the samples
     pairs = candidates(Primitive("C"), np.random.default_rng(0), 2)
-    assert len(pairs) == 3 + 4 + 2
-    assert pairs[0] == (Primitive("C"), Primitive("C")) and pairs[2][0].family == "stop"
-    assert {p[0].family for p in pairs[3:7]} == {"S", "S-mirror", "J", "J-mirror"}
+    assert len(pairs) == 5 + 4 + 2
+    assert pairs[0] == (Primitive("C"), Primitive("C")) and pairs[1][1].family == "stop"
+    assert pairs[2][0].frequency == -0.5 and pairs[3] == (pairs[2][0], Primitive("C")) and pairs[4][0].family == "stop"
+    assert {p[0].family for p in pairs[5:9]} == {"S", "S-mirror", "J", "J-mirror"}
+    assert all(p[0].frequency > 0 for p in pairs[9:])  # noise keeps the direction of rolling
+    assert len(candidates(Primitive("C"), np.random.default_rng(0), 2, near=False)) == 4 + 4 + 2
 
 
 def test_each_period_applies_the_cheapest_candidate(pushed):
     # one re-plan by hand: the chosen primitive is the argmin of the candidates' costs from that state
     assert len(pushed.cycles) == 2
     first = pushed.cycles[0]
-    assert first["rollouts"] == 8 and first["t"] == 0.0
+    assert first["rollouts"] == 10 and first["t"] == 0.0
     assert Primitive(**first["chosen"]) == pushed.plan.primitives[0]
     assert pushed.plan.starts == [0.0, pytest.approx(0.1)]
 

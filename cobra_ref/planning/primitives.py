@@ -3,7 +3,7 @@
 Implements: the gait families of [COBRA] sec. "Results" (lateral rolling in C, S and J shapes,
 sidewinding; :mod:`cobra_ref.gaits`) cut into primitives that a receding-horizon planner
 (:mod:`cobra_ref.planning.receding`) chooses one period at a time. Each primitive is a shape
-function of the gait phase phi, f(phi) -> q (11,), and a phase rate omega = 2 pi f::
+function of the gait phase phi, f(phi) -> q (11,), and a phase rate omega = 2 pi f (f < 0: the same shape rolls the other way)::
 
     rolling:      q_i = kappa_i (1 + b (s_i - 1/2)) cos phi   (yaw joints)
                   q_i = kappa_i (1 + b (s_i - 1/2)) sin phi   (pitch joints)
@@ -51,14 +51,14 @@ class Primitive:
 
     family: str = "C"
     amplitude: float = 0.5  # A [rad]
-    frequency: float = 0.5  # f [Hz]; a stop's is 0
+    frequency: float = 0.5  # f [Hz]; negative rolls (or winds) the other way; a stop's is ignored
     taper: float = 0.0  # b, rolling only
     s_J: float = 0.5  # J and J-mirror only: the hook spans s_i <= s_J
 
     def __post_init__(self):
         if self.family not in FAMILIES:
             raise PrimitiveError(f"family must be one of {', '.join(FAMILIES)}, got {self.family!r}")
-        for name, low, high in (("amplitude", 0.0, Q_MAX), ("frequency", 0.0, 10.0), ("taper", -1.0, 1.0),
+        for name, low, high in (("amplitude", 0.0, Q_MAX), ("frequency", -10.0, 10.0), ("taper", -1.0, 1.0),
                                 ("s_J", 0.0, 1.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:

@@ -7,7 +7,8 @@ stepper's memory and the plan so far):
 
 1. candidates (``candidates``): pairs of primitives (:mod:`cobra_ref.planning.primitives`), one
    for each of the next two periods: the last moving choice continued (the warm start), the same
-   then a stop, a stop (only with the box within ``NEAR`` of the target), each rolling family at
+   then a stop, the same rolling back (for both periods, and for one then on again: back to a box
+   the robot rolled past), a stop (only with the box within ``NEAR`` of the target), each rolling family at
    the last choice's amplitude and frequency, and ``samples`` copies of the last choice with
    Gaussian noise on amplitude, frequency and taper (predictive sampling; the noise from a
    generator seeded by ``seed`` and the period's index);
@@ -72,8 +73,9 @@ def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: 
     """The candidate pairs (first period, second period) of one re-plan from the last moving
     primitive ``moving`` (module docstring); a stop for both periods only when the box is ``near``
     its goal (far from it, standing still would always be a safe choice and the push would stall)."""
-    stop = Primitive("stop")
-    out = [(moving, moving), (moving, stop)] + ([(stop, stop)] if near else [])
+    stop, back = Primitive("stop"), replace(moving, frequency=-moving.frequency)
+    # rolling back (and then on again) brings the robot back to a box it has rolled past
+    out = [(moving, moving), (moving, stop), (back, back), (back, moving)] + ([(stop, stop)] if near else [])
     out += [(p, p) for p in (replace(moving, family=f) for f in ROLLING) if p != moving]
     for _ in range(samples):
         noisy = _perturbed(moving, rng)
@@ -82,11 +84,13 @@ def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: 
 
 
 def _perturbed(p: Primitive, rng: np.random.Generator) -> Primitive:
-    """p with amplitude, frequency and taper moved by Gaussian noise and clipped to their ranges."""
+    """p with amplitude, frequency (its size; its sign kept) and taper moved by Gaussian noise and
+    clipped to their ranges."""
     a, f, b = rng.normal(size=3) * (0.1, 0.15, 0.3)
     amplitude = float(np.clip(p.amplitude + a, 0.25, 0.75))
     taper = float(np.clip(p.taper + b, -0.8, 0.8)) if p.family in ROLLING else 0.0
-    return replace(p, amplitude=amplitude, frequency=float(np.clip(p.frequency + f, 0.25, 1.0)), taper=taper)
+    frequency = float(np.copysign(np.clip(abs(p.frequency) + f, 0.25, 1.0), p.frequency))
+    return replace(p, amplitude=amplitude, frequency=frequency, taper=taper)
 
 
 @dataclass(frozen=True)
