@@ -105,3 +105,26 @@ def test_a_benchmark_subset_writes_rows_and_a_picture(tmp_path):
     assert s["median_final_error"] == pytest.approx(np.median([r["final_error"] for r in rows]))
     plot_pushes(rows, str(tmp_path / "paths.png"))
     assert (tmp_path / "paths.png").stat().st_size > 1000
+
+
+def test_the_pushing_point_lies_behind_the_box_on_the_line_from_the_target():
+    # put the box so that the pushing point for a target 0.25 m ahead of it (+x) is exactly the head's
+    # centre of mass: half a box and a link radius behind the box centre; the distance is then zero
+    from cobra_ref.kinematics import forward_kinematics
+    from cobra_ref.params import CobraParameters
+    from cobra_ref.planning.receding import pushing_distance
+    from cobra_ref.robots import cobra_model, neutral_q
+
+    model, cobra = cobra_model(), CobraParameters()
+    q = neutral_q(model)
+    kin = forward_kinematics(model, q)
+    head = kin.o[0][:2] + (kin.R[0] @ model.com[0])[:2]
+    box = model.q_idx[model.boxes[0].body].start
+    centre = head + np.array([cobra.box_size / 2 + cobra.radius_link, 0.0])
+    q[box:box + 2] = centre
+    assert pushing_distance(model, q, centre + [0.25, 0.0], cobra) == pytest.approx(0.0, abs=1e-12)
+    # the target on the other side: the pushing point is on the far side of the box
+    far = pushing_distance(model, q, centre - [0.25, 0.0], cobra)
+    assert far == pytest.approx(min(
+        np.linalg.norm(kin.o[i][:2] + (kin.R[i] @ model.com[i])[:2] - (centre + [cobra.box_size / 2 + cobra.radius_link, 0]))
+        for i in range(model.nb) if i != model.boxes[0].body))

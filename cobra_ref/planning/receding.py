@@ -15,10 +15,13 @@ stepper's memory and the plan so far):
 2. each candidate is rolled out over the horizon from that state (through the executor), and
    costs, in metres (``candidate_cost``)::
 
-       J = d(t + H T_p) + d(t + T_p) / 2 + w_e E + w_I I + w_tau P_tau
+       J = d(t + H T_p) + d(t + T_p) / 2 + w_a a(t + H T_p) + w_e E + w_I I + w_tau P_tau
 
-   d: the box centre's horizontal distance to the current target; E, I, P_tau the shooting
-   cost's effort, impact and torque-limit terms (:mod:`cobra_ref.planning.cost`) over the horizon;
+   d: the box centre's horizontal distance to the current target; a: the distance from the
+   robot's nearest body centre to the pushing point, behind the box on the line from the target
+   through the box's centre, a box half-size plus a link radius out (where a pusher must be to push
+   the box towards the target, as in pusher-slider planning); E, I, P_tau the shooting cost's
+   effort, impact and torque-limit terms (:mod:`cobra_ref.planning.cost`) over the horizon;
 3. the best candidate's first primitive is appended to the plan and the plant runs one period.
 
 The target is the next waypoint until the box passes within ``via_tolerance`` of it, then the goal.
@@ -37,6 +40,7 @@ import numpy as np
 
 from ..params import CobraParameters
 from ..provenance import code_version
+from ..kinematics import forward_kinematics
 from ..robots import cobra_model
 from ..simulate import Run
 from ..start import initial_state
@@ -67,6 +71,7 @@ class PushOptions:
     w_effort: float = 0.005  # [m] per unit of E
     w_impact: float = 1.0  # [m] per unit of I: claim NI's 1 % of the robot's weight costs 1 cm
     w_tau: float = 0.1  # [m] per unit of P_tau
+    w_approach: float = 0.5  # per metre of a: the robot behind the box counts half as much as the box at its target
 
 
 def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: bool = True) -> list:
@@ -129,8 +134,21 @@ def candidate_cost(job: Rollout) -> dict:
     effort = o.settings.dt * float(np.sum(traj.tau**2)) / (traj.tau.shape[1] * o.cobra.tau_max**2 * duration)
     impact = impact_term(traj, robot_weight(model), duration)
     p_tau = o.settings.dt * float(np.sum(np.maximum(traj.steps["tau_excess"], 0.0))) / (o.cobra.tau_max * duration)
-    cost = d_end + 0.5 * d_mid + o.w_effort * effort + o.w_impact * impact + o.w_tau * p_tau
+    approach = pushing_distance(model, traj.q[-1], target, o.cobra)
+    cost = d_end + 0.5 * d_mid + o.w_approach * approach + o.w_effort * effort + o.w_impact * impact + o.w_tau * p_tau
     return {"cost": cost, "distance": d_end, "box": traj.box_pose[-1, :2].tolist(), "error": None}
+
+
+def pushing_distance(model, q, target, cobra: CobraParameters) -> float:
+    """a [m]: the robot's nearest body centre to the pushing point behind the box (module docstring)."""
+    kin = forward_kinematics(model, q)
+    box = model.boxes[0].body
+    centre = kin.o[box][:2]
+    away = centre - np.asarray(target, dtype=float)
+    u = away / max(float(np.linalg.norm(away)), 1e-9)  # from the target through the box
+    point = centre + u * (cobra.box_size / 2 + cobra.radius_link)
+    robot = [i for i in range(model.nb) if i != box]
+    return float(min(np.linalg.norm(kin.o[i][:2] + (kin.R[i] @ model.com[i])[:2] - point) for i in robot))
 
 
 @dataclass
@@ -225,7 +243,8 @@ def push_record(result: PushResult, options: PushOptions) -> dict:
                         "horizon": o.horizon, "budget": o.budget, "tolerance": o.tolerance,
                         "via_tolerance": o.via_tolerance, "samples": o.samples, "seed": o.seed,
                         "start": o.start.to_dict(), "settings": asdict(o.settings), "cobra": asdict(o.cobra),
-                        "weights": {"effort": o.w_effort, "impact": o.w_impact, "tau": o.w_tau}},
+                        "weights": {"effort": o.w_effort, "impact": o.w_impact, "tau": o.w_tau,
+                                    "approach": o.w_approach}},
             "plan": result.plan.to_dict(), "cycles": result.cycles, "goal_world": list(result.goal_world),
             "reached": result.reached, "reason": result.reason, "final_distance": final,
             "simulated_time": traj.duration,
@@ -243,7 +262,8 @@ def load_push(record: dict) -> tuple[dict, PushOptions]:
                           horizon=o["horizon"], budget=o["budget"], tolerance=o["tolerance"],
                           via_tolerance=o["via_tolerance"], samples=o["samples"], seed=o["seed"],
                           start=Primitive(**o["start"]), settings=StepSettings(**o["settings"]), cobra=cobra,
-                          w_effort=o["weights"]["effort"], w_impact=o["weights"]["impact"], w_tau=o["weights"]["tau"])
+                          w_effort=o["weights"]["effort"], w_impact=o["weights"]["impact"], w_tau=o["weights"]["tau"],
+                          w_approach=o["weights"]["approach"])
     return record["plan"], options
 
 
