@@ -85,43 +85,82 @@ def simulate(model: Model, reference, duration: float, settings: StepSettings = 
     n_steps = arguments.duration_steps(duration, settings.dt)  # settings.dt: checked by StepSettings
     if q0 is None:
         q0, qd0 = initial_state(model, reference, settings, stepper=stepper)
-    q, qd = model.check_q(q0).copy(), model.check_qd(np.zeros(model.nv) if qd0 is None else qd0).copy()
-    check_start(model, q)
-    stepping = make_stepper(stepper, model, settings)
-    log = _Log(model, n_steps, settings.dt)
-    log.add_state(0.0, q, qd)
-    # the step's matrices are small: one BLAS thread is fastest (executors.one_blas_thread)
-    with one_blas_thread():
-        start = time.perf_counter()
-        for k in range(n_steps):
-            t = k * settings.dt
-            try:
-                res = stepping.step(q, qd, t, reference)
-                q, qd = res.q, res.qd
-                if not math.isfinite(q.sum() + qd.sum()):  # a NaN or inf anywhere makes the sum non-finite
-                    raise _NonFinite(f"non-finite state at step {k}, t = {t:.4f} s")
-                log.add_step(k, res)
-                log.add_state(t + settings.dt, q, qd)
-                if progress is not None and ((k + 1) % 250 == 0 or k + 1 == n_steps):
-                    progress(k + 1, n_steps)
-            except _NonFinite as exc:
-                traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): non-finite state",
-                                  meta(model, settings, stepping))
-                raise SimulationError(str(exc), traj) from None
-            except KeyboardInterrupt as exc:
-                exc.trajectory = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): interrupted",
-                                            meta(model, settings, stepping))
-                raise
-            except Exception as exc:  # any failure of the step: keep what was computed, name step and time
-                what = str(exc) if isinstance(exc, EXPECTED) else f"{type(exc).__name__}: {exc}"
-                traj = log.finish(time.perf_counter() - start, f"step {k} (t = {t:.4f} s): {what}",
-                                  meta(model, settings, stepping))
-                raise SimulationError(f"step failed at step {k}, t = {t:.4f} s: {what}", traj) from exc
-    traj = log.finish(time.perf_counter() - start, "", meta(model, settings, stepping))
+    run = Run(model, settings, q0, qd0, stepper, n_steps)
+    run.advance(reference, n_steps, progress)
+    traj = run.finish()
     message = left_physics(traj)
     if message:
         warnings.warn(message, LeftPhysicsWarning, stacklevel=2)
     return traj
+
+
+class Run:
+    """A simulation that goes on where it stopped: one stepper (its warm start and memory kept
+    from step to step) and one log of at most ``capacity`` steps.
+
+    ``simulate`` is one ``advance`` of a new Run; a planner that decides the reference as the run
+    goes advances it piece by piece, with the same steps, bit for bit, as one ``advance`` over
+    the whole. ``t0`` and ``memory`` (a stepper's ``memory``) start a run in the middle of another
+    one: a planner's rollout from the state its plant reached.
+    """
+
+    def __init__(self, model: Model, settings: StepSettings, q0, qd0, stepper: str = "fast", capacity: int = 1,
+                 t0: float = 0.0, memory: dict | None = None):
+        self.stepping = make_stepper(stepper, model, settings)  # checks the three (infra.arguments)
+        self.stepping.memory = memory
+        self.model, self.settings, self.t0 = model, settings, float(t0)
+        self.q, self.qd = model.check_q(q0).copy(), model.check_qd(np.zeros(model.nv) if qd0 is None else qd0).copy()
+        check_start(model, self.q)
+        self.log = _Log(model, capacity, settings.dt)
+        self.log.add_state(self.t0, self.q, self.qd)
+        self.k, self.wall_time, self._started = 0, 0.0, None
+
+    @property
+    def t(self) -> float:
+        """The time [s] the run has reached."""
+        return self.t0 + self.k * self.settings.dt
+
+    def advance(self, reference, n_steps: int, progress=None) -> None:
+        """``n_steps`` more steps following ``reference``. A failure raises ``SimulationError`` (a
+        ``KeyboardInterrupt`` as it is) naming the step and time, with everything computed so far
+        as its ``trajectory`` (``simulate``)."""
+        if self.k + n_steps > len(self.log.tau):
+            raise SimulationError(f"the run holds {len(self.log.tau)} steps; {self.k} taken, {n_steps} more asked")
+        dt, log = self.settings.dt, self.log
+        # the step's matrices are small: one BLAS thread is fastest (executors.one_blas_thread)
+        with one_blas_thread():
+            self._started = time.perf_counter()
+            try:
+                for i in range(n_steps):
+                    k = self.k
+                    t = self.t0 + k * dt
+                    try:
+                        res = self.stepping.step(self.q, self.qd, t, reference)
+                        if not math.isfinite(res.q.sum() + res.qd.sum()):  # a NaN or inf anywhere makes the sum non-finite
+                            raise _NonFinite(f"non-finite state at step {k}, t = {t:.4f} s")
+                        self.q, self.qd = res.q, res.qd
+                        log.add_step(k, res)
+                        log.add_state(t + dt, self.q, self.qd)
+                        self.k = k + 1
+                        if progress is not None and ((i + 1) % 250 == 0 or i + 1 == n_steps):
+                            progress(i + 1, n_steps)
+                    except _NonFinite as exc:
+                        raise SimulationError(str(exc), self.finish(f"step {k} (t = {t:.4f} s): non-finite state")) from None
+                    except KeyboardInterrupt as exc:
+                        exc.trajectory = self.finish(f"step {k} (t = {t:.4f} s): interrupted")
+                        raise
+                    except Exception as exc:  # any failure of the step: keep what was computed, name step and time
+                        what = str(exc) if isinstance(exc, EXPECTED) else f"{type(exc).__name__}: {exc}"
+                        traj = self.finish(f"step {k} (t = {t:.4f} s): {what}")
+                        raise SimulationError(f"step failed at step {k}, t = {t:.4f} s: {what}", traj) from exc
+            finally:
+                self.wall_time += time.perf_counter() - self._started
+                self._started = None
+
+    def finish(self, error: str = "") -> Trajectory:
+        """The trajectory so far (``error``: why it ends early, empty for a run that did not fail)."""
+        running = time.perf_counter() - self._started if self._started is not None else 0.0
+        return self.log.finish(self.wall_time + running, error, meta(self.model, self.settings, self.stepping))
 
 
 # the failures a step is known to raise (named by their message alone); any other is named with its type

@@ -12,10 +12,10 @@ import argparse
 from ..infra.executors import limit_blas_threads
 from ..infra.signals import interrupted, stop_signals
 from ..provenance import __version__
-from . import bench, convergence, figures, info, optimize, simulate, sweep, view
+from . import bench, convergence, figures, info, optimize, push, simulate, sweep, view
 from .common import interrupted_exit
 
-SUBCOMMANDS = (info, simulate, optimize, figures, view, bench, convergence, sweep)
+SUBCOMMANDS = (info, simulate, optimize, push, figures, view, bench, convergence, sweep)
 
 
 def build_parser() -> argparse.ArgumentParser:

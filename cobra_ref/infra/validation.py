@@ -81,6 +81,12 @@ RULES = {
     "popsize": Rule("popsize", "-", 1, 1000, kind="int"),
     "workers": Rule("workers", "-", 1, 1024, kind="int"),
     "weight": Rule("weight", "-", 0.0, 1e6, why="a weight of the shooting cost (A17)"),
+    # the push planner
+    "push_budget": Rule("budget", "s", 0.0, 600.0, low_open=True, why="simulated time of one push"),
+    "push_period": Rule("period", "s", 0.1, 5.0, why="one re-plan per period; a rolling cycle at 0.5 Hz is 2 s"),
+    "push_horizon": Rule("horizon", "-", 1, 5, kind="int", why="periods each rollout looks ahead"),
+    "push_samples": Rule("samples", "-", 0, 64, kind="int", why="noisy copies of the last choice per re-plan"),
+    "push_tolerance": Rule("tolerance", "m", 1e-3, 1.0, why="the box within this of the goal ends the push"),
     # the benchmark
     "horizon": Rule("duration", "s", 0.0, MAX_STEPS * DT_MAX, low_open=True,
                     why="at most 10^6 steps of the largest dt", note="at most 10^6 steps of dt"),

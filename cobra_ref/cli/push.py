@@ -1,0 +1,167 @@
+"""``cobra-ref push``: push the box to a point (and through waypoints), re-planning every period.
+
+The command-line side of :mod:`cobra_ref.planning.receding` (conventions: :mod:`cobra_ref.cli.common`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import sys
+
+from ..infra.executors import SerialExecutor, own_pool
+from ..infra.validation import DEFAULT_DT, RULES
+from .common import (add_model_options, c_stdout_silenced, check_out, fail, interrupted_exit, model_parameters,
+                     say_interrupted, write_text_atomic)
+
+
+def add_parsers(sub) -> None:
+    """Add the ``push`` subcommand to ``sub``."""
+    from ..planning.receding import PushOptions
+
+    d = PushOptions()
+    p = sub.add_parser(
+        "push", help="push the box to a point, re-planning every period (receding horizon)",
+        description="Push the box to a goal (through waypoints): every PERIOD seconds, from the state reached, "
+                    "roll out candidate primitives (rolling shapes with amplitude, frequency and taper, and a "
+                    "stop) over HORIZON periods, apply the best for one period, repeat; see "
+                    "cobra_ref/planning/receding.py and docs/planning.md. One progress line per period on stderr, "
+                    "one JSON line on stdout. OUT holds the executed run (an NPZ like simulate's); PLAN the chosen "
+                    "primitives (a JSON that replays to the same run, bit for bit). Ctrl-C keeps what was executed.")
+    p.add_argument("--goal", type=RULES["goal_pair"].arg("--goal"), default=None, metavar="X,Y",
+                   help="where to push the box, relative to its start [m], world axes (x = the robot's initial "
+                        "heading, y = its left; a negative X needs --goal=-0.1,0.2)")
+    p.add_argument("--via", type=RULES["goal_pair"].arg("--via"), action="append", default=[], metavar="X,Y",
+                   help="a waypoint on the way, same axes (repeatable, in order)")
+    p.add_argument("--budget", type=RULES["push_budget"].arg("--budget"), default=d.budget,
+                   help=f"simulated time at most [s] (default {d.budget:g})")
+    p.add_argument("--period", type=RULES["push_period"].arg("--period"), default=d.period,
+                   help=f"one re-plan per period [s] (default {d.period:g})")
+    p.add_argument("--horizon", type=RULES["push_horizon"].arg("--horizon"), default=d.horizon,
+                   help=f"periods each rollout looks ahead (default {d.horizon})")
+    p.add_argument("--samples", type=RULES["push_samples"].arg("--samples"), default=d.samples,
+                   help=f"noisy copies of the last choice per re-plan (default {d.samples})")
+    p.add_argument("--tolerance", type=RULES["push_tolerance"].arg("--tolerance"), default=d.tolerance,
+                   help=f"the push ends with the box within this of the goal [m] (default {d.tolerance:g})")
+    p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=0, help="seed of the sampling noise (default 0)")
+    p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=DEFAULT_DT,
+                   help=f"time step of the plant and the rollouts [s] (default {DEFAULT_DT * 1e3:g} ms)")
+    add_model_options(p)
+    p.add_argument("--workers", type=RULES["workers"].arg("--workers"), default=None,
+                   help="worker processes for the rollouts (default: the cores; 1 = serial, in this process)")
+    p.add_argument("--out", required=True, help="the executed run (NPZ, exactly this name)")
+    p.add_argument("--plan", default=None, help="the plan JSON (default: OUT without its extension + .plan.json)")
+    p.add_argument("--replay", metavar="PLAN", default=None,
+                   help="replay a plan JSON of an earlier push (no planning): OUT is then its executed run, bit for "
+                        "bit; the other planner options are the plan's")
+    p.add_argument("--benchmark", action="store_true",
+                   help="push to the benchmark's 16 goals and 2 waypoint paths (cobra_ref/planning/benchmark.py) "
+                        "instead of --goal; OUT is then the JSON of the rows (rewritten after each task)")
+    p.add_argument("--figure", default=None, help="--benchmark: also draw every box path with its goal (PNG)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=cmd_push)
+
+
+def cmd_push(args) -> int:
+    """Run the push, write the run and the plan, print one JSON line. Exit 0 when the box reached
+    the goal, 1 when the budget ran out first, 130 after Ctrl-C and 143 after SIGTERM (what was
+    executed is written)."""
+    from ..planning.receding import push, push_record
+
+    if args.replay is not None:
+        return _replay(args)
+    if args.benchmark:
+        return _benchmark(args)
+    if args.goal is None:
+        raise fail("give --goal X,Y (or --replay PLAN)")
+    plan_path = args.plan or os.path.splitext(args.out)[0] + ".plan.json"
+    check_out(args.out, "--out")
+    check_out(plan_path, "--plan")
+    options = _options(args)
+    err = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+    stop = None  # the interrupt (Ctrl-C or SIGTERM) that ended the push
+    with c_stdout_silenced():
+        try:
+            with _executor(args.workers) as executor:
+                result = push(options, executor, progress=err)
+        except KeyboardInterrupt as exc:
+            result, stop = getattr(exc, "result", None), exc
+            if result is None:
+                raise interrupted_exit(exc, "nothing was executed") from None
+    record = push_record(result, options)
+    try:
+        result.trajectory.to_npz(args.out)
+    except OSError as exc:
+        raise fail(f"{args.out}: {exc}") from None
+    write_text_atomic(plan_path, json.dumps(record, indent=1) + "\n", "--plan")
+    print(f"{result.reason}: box {100 * record['final_distance']:.2f} cm from the goal after "
+          f"{record['simulated_time']:g} s; wrote {args.out} and {plan_path}", file=sys.stderr)
+    print(json.dumps({k: record[k] for k in ("reached", "reason", "final_distance", "simulated_time",
+                                             "impact_impulse_per_second", "rollouts", "wall_time")}))
+    if stop is not None:
+        return say_interrupted(stop, f"the {record['simulated_time']:g} s executed are in {args.out} and {plan_path}")
+    return 0 if result.reached else 1
+
+
+def _replay(args) -> int:
+    """``push --replay PLAN --out OUT``: the executed run of a plan, written to OUT."""
+    from ..planning.receding import load_push, replay
+
+    check_out(args.out, "--out")
+    try:
+        with open(args.replay, encoding="utf-8") as f:
+            plan, options = load_push(json.load(f))
+    except (OSError, ValueError, KeyError, TypeError, RecursionError) as exc:
+        raise fail(f"--replay {args.replay}: {exc}") from None
+    with c_stdout_silenced():
+        traj = replay(plan, options)
+    try:
+        traj.to_npz(args.out)
+    except OSError as exc:
+        raise fail(f"{args.out}: {exc}") from None
+    print(json.dumps(traj.summary()))
+    return 0
+
+
+def _options(args):
+    """The ``PushOptions`` of the command line."""
+    from ..planning.receding import PushOptions
+    from ..step import StepSettings
+
+    return PushOptions(goal=args.goal if args.goal is not None else (0.25, 0.0), via=tuple(args.via), budget=args.budget, period=args.period,
+                       horizon=args.horizon, samples=args.samples, tolerance=args.tolerance, seed=args.seed,
+                       settings=StepSettings(dt=args.dt), cobra=model_parameters(args))
+
+
+@contextlib.contextmanager
+def _executor(workers):
+    """The rollouts' executor: serial with ``--workers 1``, else a process pool of our own."""
+    if workers == 1:
+        yield SerialExecutor()
+    else:
+        with own_pool(workers) as executor:
+            yield executor
+
+
+def _benchmark(args) -> int:
+    """``push --benchmark``: every benchmark task, the rows written to OUT after each one."""
+    from ..planning.benchmark import run_benchmark, summary
+
+    check_out(args.out, "--out")
+    if args.figure:
+        check_out(args.figure, "--figure")
+    err = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+
+    def keep(rows):
+        write_text_atomic(args.out, json.dumps({"summary": summary(rows), "rows": rows}, indent=1) + "\n", "--out")
+
+    with c_stdout_silenced():
+        with _executor(args.workers) as executor:
+            rows = run_benchmark(_options(args), executor, progress=err, keep=keep)
+    if args.figure:
+        from ..viz.push_paths import plot_pushes
+
+        plot_pushes(rows, args.figure)
+    print(json.dumps(summary(rows)))
+    return 0

@@ -1,0 +1,283 @@
+"""Push the box to a point: a receding-horizon planner that re-plans every period from the state reached.
+
+Implements: [COBRA] sec. "Results", "the goal is to move the box on the flat ground towards a
+specified point, and corresponding suitable joint commands are derived", closed loop. Every
+period T_p (``PushOptions.period``), from the state the run has reached (the plant's q, qd, its
+stepper's memory and the plan so far):
+
+1. candidates (``candidates``): pairs of primitives (:mod:`cobra_ref.planning.primitives`), one
+   for each of the next two periods: the last moving choice continued (the warm start), the same
+   then a stop, the same rolling back (for both periods, and for one then on again: back to a box
+   the robot rolled past), a stop (only with the box within ``NEAR`` of the target), each rolling family at
+   the last choice's amplitude and frequency, and ``samples`` copies of the last choice with
+   Gaussian noise on amplitude, frequency and taper (predictive sampling; the noise from a
+   generator seeded by ``seed`` and the period's index);
+2. each candidate is rolled out over the horizon from that state (through the executor), and
+   costs, in metres (``candidate_cost``)::
+
+       J = d(t + H T_p) + d(t + T_p) / 2 + w_a a(t + H T_p) + w_e E + w_I I + w_tau P_tau
+
+   d: the box centre's horizontal distance to the current target; a: the distance from the
+   robot's nearest body centre to the pushing point, behind the box on the line from the target
+   through the box's centre, a box half-size plus a link radius out (where a pusher must be to push
+   the box towards the target, as in pusher-slider planning); E, I, P_tau the shooting cost's
+   effort, impact and torque-limit terms (:mod:`cobra_ref.planning.cost`) over the horizon;
+3. the best candidate's first primitive is appended to the plan and the plant runs one period.
+
+The target is the next waypoint until the box passes within ``via_tolerance`` of it, then the goal.
+The push ends when the box is within ``tolerance`` of the goal at the end of a period in which
+the robot stopped (the box at rest), or when the budget of simulated time is spent. The plant is
+one ``simulate.Run`` advanced period by period: replaying the plan (``replay``) takes the same
+steps, bit for bit.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field, replace
+
+import numpy as np
+
+from ..params import CobraParameters
+from ..provenance import code_version
+from ..kinematics import forward_kinematics
+from ..robots import cobra_model
+from ..simulate import Run
+from ..start import initial_state
+from ..step import SimulationError, StepSettings
+from .cost import impact_term, robot_weight
+from .primitives import ROLLING, PlanReference, Primitive
+
+FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
+NEAR = 0.05  # [m] a stop for the whole horizon is a candidate only with the box this near its target
+
+
+@dataclass(frozen=True)
+class PushOptions:
+    """A push task and the planner's settings (module docstring); distances in metres, times in seconds."""
+
+    goal: tuple = (0.25, 0.0)  # (dx, dy) from the box's start, world axes (x: the robot's initial heading)
+    via: tuple = ()  # waypoints ((dx, dy), ...) on the way, same axes
+    period: float = 1.0  # T_p: one re-plan per period
+    horizon: int = 2  # H: periods each rollout looks ahead
+    budget: float = 30.0  # simulated time at most
+    tolerance: float = 0.01  # done within this of the goal
+    via_tolerance: float = 0.03  # a waypoint is passed within this
+    samples: int = 6  # noisy copies of the last choice per re-plan
+    seed: int = 0
+    start: Primitive = Primitive("C", 0.5, 0.5)  # the start shape (the box on its concave side) and first guess
+    settings: StepSettings = field(default_factory=StepSettings)
+    cobra: CobraParameters = field(default_factory=CobraParameters)
+    w_effort: float = 0.005  # [m] per unit of E
+    w_impact: float = 1.0  # [m] per unit of I: claim NI's 1 % of the robot's weight costs 1 cm
+    w_tau: float = 0.1  # [m] per unit of P_tau
+    w_approach: float = 0.5  # per metre of a: the robot behind the box counts half as much as the box at its target
+
+
+def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: bool = True) -> list:
+    """The candidate pairs (first period, second period) of one re-plan from the last moving
+    primitive ``moving`` (module docstring); a stop for both periods only when the box is ``near``
+    its goal (far from it, standing still would always be a safe choice and the push would stall)."""
+    stop, back = Primitive("stop"), replace(moving, frequency=-moving.frequency)
+    # rolling back (and then on again) brings the robot back to a box it has rolled past
+    out = [(moving, moving), (moving, stop), (back, back), (back, moving)] + ([(stop, stop)] if near else [])
+    out += [(p, p) for p in (replace(moving, family=f) for f in ROLLING) if p != moving]
+    for _ in range(samples):
+        noisy = _perturbed(moving, rng)
+        out.append((noisy, noisy))
+    return out
+
+
+def _perturbed(p: Primitive, rng: np.random.Generator) -> Primitive:
+    """p with amplitude, frequency (its size; its sign kept) and taper moved by Gaussian noise and
+    clipped to their ranges."""
+    a, f, b = rng.normal(size=3) * (0.1, 0.15, 0.3)
+    amplitude = float(np.clip(p.amplitude + a, 0.25, 0.75))
+    taper = float(np.clip(p.taper + b, -0.8, 0.8)) if p.family in ROLLING else 0.0
+    frequency = float(np.copysign(np.clip(abs(p.frequency) + f, 0.25, 1.0), p.frequency))
+    return replace(p, amplitude=amplitude, frequency=frequency, taper=taper)
+
+
+@dataclass(frozen=True)
+class Rollout:
+    """What a worker needs for one candidate: the plant's state and plan, the candidate, the target."""
+
+    plan: dict  # PlanReference.to_dict() so far
+    pair: tuple  # (Primitive, Primitive)
+    t: float
+    q: np.ndarray
+    qd: np.ndarray
+    memory: dict | None
+    target: tuple  # world (x, y)
+    options: PushOptions
+
+
+def candidate_cost(job: Rollout) -> dict:
+    """One candidate's rollout and its cost J (module docstring): {"cost", "distance", "box"}.
+    What the executor runs (module level: picklable)."""
+    o = job.options
+    plan = PlanReference.from_dict(job.plan)
+    plan.extend(job.pair[0], job.t)
+    plan.extend(job.pair[1], job.t + o.period)
+    model = cobra_model(o.cobra)
+    n_period = int(round(o.period / o.settings.dt))
+    run = Run(model, o.settings, job.q, job.qd, "fast", n_period * o.horizon, t0=job.t, memory=job.memory)
+    try:
+        run.advance(plan, n_period * o.horizon)
+    except SimulationError as exc:
+        return {"cost": FAILED, "distance": None, "box": None, "error": str(exc)}
+    traj = run.finish()
+    target = np.asarray(job.target)
+    d_mid = float(np.linalg.norm(traj.box_pose[n_period, :2] - target))
+    d_end = float(np.linalg.norm(traj.box_pose[-1, :2] - target))
+    duration = traj.duration
+    effort = o.settings.dt * float(np.sum(traj.tau**2)) / (traj.tau.shape[1] * o.cobra.tau_max**2 * duration)
+    impact = impact_term(traj, robot_weight(model), duration)
+    p_tau = o.settings.dt * float(np.sum(np.maximum(traj.steps["tau_excess"], 0.0))) / (o.cobra.tau_max * duration)
+    approach = pushing_distance(model, traj.q[-1], target, o.cobra)
+    cost = d_end + 0.5 * d_mid + o.w_approach * approach + o.w_effort * effort + o.w_impact * impact + o.w_tau * p_tau
+    return {"cost": cost, "distance": d_end, "box": traj.box_pose[-1, :2].tolist(), "error": None}
+
+
+def pushing_distance(model, q, target, cobra: CobraParameters) -> float:
+    """a [m]: the robot's nearest body centre to the pushing point behind the box (module docstring)."""
+    kin = forward_kinematics(model, q)
+    box = model.boxes[0].body
+    centre = kin.o[box][:2]
+    away = centre - np.asarray(target, dtype=float)
+    u = away / max(float(np.linalg.norm(away)), 1e-9)  # from the target through the box
+    point = centre + u * (cobra.box_size / 2 + cobra.radius_link)
+    robot = [i for i in range(model.nb) if i != box]
+    return float(min(np.linalg.norm(kin.o[i][:2] + (kin.R[i] @ model.com[i])[:2] - point) for i in robot))
+
+
+@dataclass
+class PushResult:
+    """The executed run, its plan and one record per period (``push``)."""
+
+    trajectory: object
+    plan: PlanReference
+    cycles: list
+    goal_world: tuple
+    reached: bool
+    reason: str
+    wall_time: float
+
+
+def push(options: PushOptions, executor=None, progress=None) -> PushResult:
+    """Push the box to ``options.goal`` (module docstring); ``progress(line)`` gets one line per period.
+
+    ``executor``: a ``concurrent.futures.Executor`` for the rollouts (None: in this process). A
+    Ctrl-C ends the push after the period under way and keeps what was executed.
+    """
+    o = options
+    model = cobra_model(o.cobra)
+    plan = PlanReference(o.start)
+    q0, qd0 = initial_state(model, plan, o.settings)
+    box = model.q_idx[model.boxes[0].body].start
+    box0 = q0[box:box + 2].copy()
+    targets = [tuple(box0 + np.asarray(w, dtype=float)) for w in tuple(o.via) + (o.goal,)]
+    n_period = int(round(o.period / o.settings.dt))
+    n_budget = int(round(o.budget / o.period))
+    run = Run(model, o.settings, q0, qd0, "fast", n_period * n_budget)
+    cycles, last, moving, aim = [], o.start, o.start, 0
+    start, reason, reached = time.perf_counter(), "budget spent", False
+
+    def distance() -> float:  # the box centre to the current target [m]
+        return float(np.linalg.norm(run.q[box:box + 2] - np.asarray(targets[aim])))
+
+    try:
+        for k in range(n_budget):
+            t = run.t
+            pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=distance() <= NEAR)
+            results = _rollouts(executor, plan, run, pairs, targets[aim], o)
+            best = int(np.argmin([r["cost"] for r in results]))
+            last = pairs[best][0]
+            moving = last if last.family != "stop" else moving
+            plan.extend(last, t)
+            run.advance(plan, n_period)
+            d = distance()
+            cycles.append({"t": t, "chosen": last.to_dict(), "predicted_cost": results[best]["cost"],
+                           "distance": d, "target": list(targets[aim]), "rollouts": len(pairs),
+                           "wall_time": time.perf_counter() - start,
+                           "candidates": [{"pair": [_name(p) for p in pair], "cost": r["cost"],
+                                           "distance": r["distance"]} for pair, r in zip(pairs, results)]})
+            if progress is not None:
+                progress(f"t = {run.t:5.1f} s  {_name(last):<28} box {100 * d:6.2f} cm from "
+                         f"{'the goal' if aim == len(targets) - 1 else f'waypoint {aim + 1}'}")
+            if aim < len(targets) - 1 and d <= o.via_tolerance:
+                aim += 1
+            elif aim == len(targets) - 1 and d <= o.tolerance and last.family == "stop":
+                reason, reached = "the box is at the goal", True
+                break
+    except KeyboardInterrupt as exc:
+        exc.result = PushResult(run.finish("interrupted"), plan, cycles, targets[-1], False, "interrupted",
+                                time.perf_counter() - start)
+        raise
+    return PushResult(run.finish(), plan, cycles, targets[-1], reached, reason, time.perf_counter() - start)
+
+
+def _rollouts(executor, plan: PlanReference, run: Run, pairs: list, target, options: PushOptions) -> list:
+    """``candidate_cost`` of every pair from the state ``run`` has reached, in order (through ``executor``)."""
+    jobs = [Rollout(plan.to_dict(), pair, run.t, run.q, run.qd, run.stepping.memory, target, options)
+            for pair in pairs]
+    return list(executor.map(candidate_cost, jobs)) if executor is not None else [candidate_cost(j) for j in jobs]
+
+
+def _name(p: Primitive) -> str:
+    """A primitive in a few words: family, amplitude, frequency, taper."""
+    if p.family == "stop":
+        return "stop"
+    return f"{p.family} A {p.amplitude:.2f} f {p.frequency:.2f} b {p.taper:+.2f}"
+
+
+FORMAT = "cobra-ref push v1"
+
+
+def push_record(result: PushResult, options: PushOptions) -> dict:
+    """The plan JSON: the options, the plan, one record per period and the outcome (``load_push`` reads it)."""
+    traj, o = result.trajectory, options
+    final = float(np.linalg.norm(traj.box_pose[-1, :2] - np.asarray(result.goal_world)))
+    return {"format": FORMAT, "code": code_version(planning=True),
+            "options": {"goal": list(o.goal), "via": [list(v) for v in o.via], "period": o.period,
+                        "horizon": o.horizon, "budget": o.budget, "tolerance": o.tolerance,
+                        "via_tolerance": o.via_tolerance, "samples": o.samples, "seed": o.seed,
+                        "start": o.start.to_dict(), "settings": asdict(o.settings), "cobra": asdict(o.cobra),
+                        "weights": {"effort": o.w_effort, "impact": o.w_impact, "tau": o.w_tau,
+                                    "approach": o.w_approach}},
+            "plan": result.plan.to_dict(), "cycles": result.cycles, "goal_world": list(result.goal_world),
+            "reached": result.reached, "reason": result.reason, "final_distance": final,
+            "simulated_time": traj.duration,
+            "impact_impulse_per_second": float(np.sum(traj.steps["impact_impulse"])) / max(traj.duration, 1e-12),
+            "rollouts": int(sum(c["rollouts"] for c in result.cycles)), "wall_time": round(result.wall_time, 1)}
+
+
+def load_push(record: dict) -> tuple[dict, PushOptions]:
+    """(plan, options) of a plan JSON's record (``push_record``), for ``replay``; ValueError if malformed."""
+    if not isinstance(record, dict) or record.get("format") != FORMAT:
+        raise ValueError(f"not a push plan (expected format {FORMAT!r})")
+    o = record["options"]
+    cobra = CobraParameters(**{k: tuple(v) if isinstance(v, list) else v for k, v in o["cobra"].items()})
+    options = PushOptions(goal=tuple(o["goal"]), via=tuple(tuple(v) for v in o["via"]), period=o["period"],
+                          horizon=o["horizon"], budget=o["budget"], tolerance=o["tolerance"],
+                          via_tolerance=o["via_tolerance"], samples=o["samples"], seed=o["seed"],
+                          start=Primitive(**o["start"]), settings=StepSettings(**o["settings"]), cobra=cobra,
+                          w_effort=o["weights"]["effort"], w_impact=o["weights"]["impact"], w_tau=o["weights"]["tau"],
+                          w_approach=o["weights"]["approach"])
+    return record["plan"], options
+
+
+def replay(plan_dict: dict, options: PushOptions):
+    """The executed run of a plan (``PushResult.plan.to_dict()``) replayed from the same start: the
+    same steps as ``push`` took, bit for bit."""
+    o = options
+    model = cobra_model(o.cobra)
+    plan = PlanReference.from_dict(plan_dict)
+    q0, qd0 = initial_state(model, PlanReference(plan.start), o.settings)
+    n_period = int(round(o.period / o.settings.dt))
+    n = n_period * len(plan.primitives)
+    run = Run(model, o.settings, q0, qd0, "fast", n)
+    # period by period, as the plant ran (the reference is the whole plan: it gives the same values)
+    for _ in range(len(plan.primitives)):
+        run.advance(plan, n_period)
+    return run.finish()

@@ -1,0 +1,130 @@
+"""The receding-horizon push: one re-plan step by hand, the plan replays bit for bit, interrupts keep the run."""
+
+import json
+
+import numpy as np
+import pytest
+
+from cobra_ref.cli import main
+from cobra_ref.infra.executors import SerialExecutor
+from cobra_ref.planning.primitives import Primitive
+from cobra_ref.planning.receding import PushOptions, candidate_cost, candidates, push, replay
+from cobra_ref.step import StepSettings
+
+# two periods of 0.1 s at dt = 2 ms, one period ahead, one noisy sample: 10 rollouts of 50 steps per re-plan
+TINY = PushOptions(goal=(0.05, 0.0), period=0.1, horizon=1, budget=0.2, samples=1,
+                   settings=StepSettings(dt=0.002))
+
+
+@pytest.fixture(scope="module")
+def pushed():
+    return push(TINY, SerialExecutor())
+
+
+def test_the_candidates_of_a_replan():
+    # the last choice continued, then stopped, rolled back (then on), a stop near the goal, the four
+    # other rolling shapes, the samples
+    pairs = candidates(Primitive("C"), np.random.default_rng(0), 2)
+    assert len(pairs) == 5 + 4 + 2
+    assert pairs[0] == (Primitive("C"), Primitive("C")) and pairs[1][1].family == "stop"
+    assert pairs[2][0].frequency == -0.5 and pairs[3] == (pairs[2][0], Primitive("C")) and pairs[4][0].family == "stop"
+    assert {p[0].family for p in pairs[5:9]} == {"S", "S-mirror", "J", "J-mirror"}
+    assert all(p[0].frequency > 0 for p in pairs[9:])  # noise keeps the direction of rolling
+    assert len(candidates(Primitive("C"), np.random.default_rng(0), 2, near=False)) == 4 + 4 + 2
+
+
+def test_each_period_applies_the_cheapest_candidate(pushed):
+    # one re-plan by hand: the chosen primitive is the argmin of the candidates' costs from that state
+    assert len(pushed.cycles) == 2
+    first = pushed.cycles[0]
+    assert first["rollouts"] == 10 and first["t"] == 0.0
+    assert Primitive(**first["chosen"]) == pushed.plan.primitives[0]
+    assert pushed.plan.starts == [0.0, pytest.approx(0.1)]
+
+
+def test_the_plan_replays_to_the_executed_run_bit_for_bit(pushed):
+    again = replay(pushed.plan.to_dict(), TINY)
+    for name in ("q", "qd", "tau", "box_pose"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(pushed.trajectory, name))
+
+
+def test_an_interrupt_keeps_what_was_executed():
+    calls = []
+
+    def progress(line):
+        calls.append(line)
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt) as info:
+        push(TINY, SerialExecutor(), progress=progress)
+    result = info.value.result
+    assert result.reason == "interrupted" and len(result.cycles) == 1
+    assert result.trajectory.t[-1] == pytest.approx(0.1)  # the whole first period
+
+
+def test_push_command_writes_the_run_and_a_plan_that_replays(tmp_path, capsys):
+    out, again = tmp_path / "run.npz", tmp_path / "again.npz"
+    code = main(["push", "--goal", "0.05,0", "--period", "0.1", "--budget", "0.2", "--horizon", "1",
+                 "--samples", "0", "--dt", "0.002", "--workers", "1", "--out", str(out), "--quiet"])
+    assert code in (0, 1)  # reached, or the budget ran out first
+    record = json.loads((tmp_path / "run.plan.json").read_text())
+    assert len(record["cycles"]) == 2 and record["format"] == "cobra-ref push v1"
+    line = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert line["final_distance"] == pytest.approx(record["final_distance"])
+    assert main(["push", "--replay", str(tmp_path / "run.plan.json"), "--out", str(again)]) == 0
+    a, b = np.load(out), np.load(again)
+    np.testing.assert_array_equal(a["q"], b["q"])
+
+
+def test_push_without_a_goal_is_refused(tmp_path):
+    with pytest.raises(SystemExit, match="--goal"):
+        main(["push", "--out", str(tmp_path / "run.npz")])
+
+
+def test_the_benchmark_has_sixteen_goals_around_the_box_and_two_paths():
+    from cobra_ref.planning.benchmark import GOALS
+
+    singles = [g for g in GOALS if not g[2]]
+    assert len(singles) == 16 and len(GOALS) == 18
+    distances = sorted({round(float(np.hypot(*g[1])), 9) for g in singles})
+    angles = sorted({round(float(np.degrees(np.arctan2(g[1][1], g[1][0]))) % 360) for g in singles})
+    assert distances == [0.25, 0.5] and angles == list(range(0, 360, 45))
+
+
+def test_a_benchmark_subset_writes_rows_and_a_picture(tmp_path):
+    from cobra_ref.planning.benchmark import run_benchmark, summary
+    from cobra_ref.viz.push_paths import plot_pushes
+
+    kept = []
+    tasks = (("ahead", (0.05, 0.0), ()), ("via", (0.05, 0.0), ((0.02, 0.0),)))
+    rows = run_benchmark(TINY, SerialExecutor(), tasks=tasks, keep=lambda r: kept.append(len(r)))
+    assert kept == [1, 2] and [r["task"] for r in rows] == ["ahead", "via"]
+    assert len(rows[1]["waypoint_passes"]) == 1 and rows[0]["simulated_time"] == pytest.approx(0.2)
+    s = summary(rows)
+    assert s["tasks"] == 2 and s["waypoints"] == 1
+    assert s["median_final_error"] == pytest.approx(np.median([r["final_error"] for r in rows]))
+    plot_pushes(rows, str(tmp_path / "paths.png"))
+    assert (tmp_path / "paths.png").stat().st_size > 1000
+
+
+def test_the_pushing_point_lies_behind_the_box_on_the_line_from_the_target():
+    # put the box so that the pushing point for a target 0.25 m ahead of it (+x) is exactly the head's
+    # centre of mass: half a box and a link radius behind the box centre; the distance is then zero
+    from cobra_ref.kinematics import forward_kinematics
+    from cobra_ref.params import CobraParameters
+    from cobra_ref.planning.receding import pushing_distance
+    from cobra_ref.robots import cobra_model, neutral_q
+
+    model, cobra = cobra_model(), CobraParameters()
+    q = neutral_q(model)
+    kin = forward_kinematics(model, q)
+    head = kin.o[0][:2] + (kin.R[0] @ model.com[0])[:2]
+    box = model.q_idx[model.boxes[0].body].start
+    centre = head + np.array([cobra.box_size / 2 + cobra.radius_link, 0.0])
+    q[box:box + 2] = centre
+    assert pushing_distance(model, q, centre + [0.25, 0.0], cobra) == pytest.approx(0.0, abs=1e-12)
+    # the target on the other side: the pushing point is on the far side of the box
+    far = pushing_distance(model, q, centre - [0.25, 0.0], cobra)
+    assert far == pytest.approx(min(
+        np.linalg.norm(kin.o[i][:2] + (kin.R[i] @ model.com[i])[:2] - (centre + [cobra.box_size / 2 + cobra.radius_link, 0]))
+        for i in range(model.nb) if i != model.boxes[0].body))
