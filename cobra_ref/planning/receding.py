@@ -71,7 +71,7 @@ class PushOptions:
     w_effort: float = 0.005  # [m] per unit of E
     w_impact: float = 1.0  # [m] per unit of I: claim NI's 1 % of the robot's weight costs 1 cm
     w_tau: float = 0.1  # [m] per unit of P_tau
-    w_approach: float = 0.5  # per metre of a: the robot behind the box counts half as much as the box at its target
+    w_approach: float = 0.0  # per metre of a; 0.5 did not help two goals outside C's cone (docs/planning.md)
 
 
 def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: bool = True) -> list:
