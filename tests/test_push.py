@@ -128,3 +128,16 @@ def test_the_pushing_point_lies_behind_the_box_on_the_line_from_the_target():
     assert far == pytest.approx(min(
         np.linalg.norm(kin.o[i][:2] + (kin.R[i] @ model.com[i])[:2] - (centre + [cobra.box_size / 2 + cobra.radius_link, 0]))
         for i in range(model.nb) if i != model.boxes[0].body))
+
+
+@pytest.mark.parametrize("field, value, error", [
+    ("goal", (0.1,), ValueError), ("goal", (float("nan"), 0.0), ValueError), ("goal", "0.1,0", TypeError),
+    ("via", ((0.1, 0.0, 0.2),), ValueError), ("via", "0.1,0", TypeError), ("period", 0.0, ValueError),
+    ("horizon", 0, ValueError), ("budget", -1.0, ValueError), ("samples", 1.5, ValueError),
+    ("w_impact", -1.0, ValueError), ("settings", {"dt": 0.001}, TypeError), ("start", "C", TypeError),
+])
+def test_push_options_are_checked_by_the_command_lines_rules(field, value, error):
+    from dataclasses import replace
+
+    with pytest.raises(error, match=field):
+        replace(TINY, **{field: value})

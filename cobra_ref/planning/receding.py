@@ -38,6 +38,8 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from ..infra import arguments
+from ..infra.validation import RULES
 from ..params import CobraParameters
 from ..provenance import code_version
 from ..kinematics import forward_kinematics
@@ -72,6 +74,24 @@ class PushOptions:
     w_impact: float = 1.0  # [m] per unit of I: claim NI's 1 % of the robot's weight costs 1 cm
     w_tau: float = 0.1  # [m] per unit of P_tau
     w_approach: float = 0.0  # per metre of a; 0.5 did not help two goals outside C's cone (docs/planning.md)
+
+    def __post_init__(self):
+        """Each field by the command line's rule (``infra.validation``): an ``infra.arguments``
+        error naming the field, its value and what is allowed."""
+        put = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731  (a frozen dataclass)
+        put("goal", arguments.numbers("goal", self.goal, 2, RULES["goal"], ("X", "Y")))
+        if not isinstance(self.via, (list, tuple)):
+            raise arguments.ArgumentTypeError(f"via = {arguments.shown(self.via)} is not a list of waypoints "
+                                              "(allowed: ((dx, dy), ...) in metres)")
+        put("via", tuple(arguments.numbers(f"via[{i}]", w, 2, RULES["goal"], ("X", "Y")) for i, w in enumerate(self.via)))
+        for name, rule in (("period", "push_period"), ("horizon", "push_horizon"), ("budget", "push_budget"),
+                           ("tolerance", "push_tolerance"), ("via_tolerance", "push_tolerance"),
+                           ("samples", "push_samples"), ("seed", "seed"), ("w_effort", "weight"),
+                           ("w_impact", "weight"), ("w_tau", "weight"), ("w_approach", "weight")):
+            put(name, arguments.number(name, getattr(self, name), RULES[rule]))
+        arguments.instance("start", self.start, Primitive, "Primitive('C', 0.5, 0.5)")
+        arguments.instance("settings", self.settings, StepSettings, "StepSettings(dt=0.001)")
+        arguments.instance("cobra", self.cobra, CobraParameters, "CobraParameters()")
 
 
 def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: bool = True) -> list:
