@@ -76,3 +76,18 @@ def sphere_and_box(mu, sphere_mass=0.5, sphere_radius=0.03, mu_robot_box=None):
                  gravity=np.array([0.0, 0.0, -GRAVITY]), q_limit=(np.inf,) * 2, tau_limit=(np.inf,) * 2,
                  spheres=sphere, boxes=(BoxGeom(body=1, half=np.full(3, BOX_SIDE / 2)),), mu=mu,
                  mu_robot_box=mu_robot_box)
+
+
+def pressed_box_state(model, reference, depth):
+    """The start q with the box placed against the middle links (gap 0, ``start.placed_state``) and
+    then moved ``depth`` [m] further towards them: a box pressed into the robot. (A placement's gap
+    is >= 0 by its rule; a test that needs the box pressed moves it itself.)"""
+    from cobra_ref.start import BoxPlacement, placed_state
+
+    box = model.q_idx[model.boxes[0].body].start
+    touching = placed_state(model, reference, BoxPlacement(gap=0.0))
+    apart = placed_state(model, reference, BoxPlacement(gap=0.01))
+    away = apart[box:box + 2] - touching[box:box + 2]  # from the robot towards the box, 1 cm long
+    q = touching.copy()
+    q[box:box + 2] -= depth * away / np.linalg.norm(away)
+    return q

@@ -72,7 +72,7 @@ def test_the_readme_holds_the_two_set_up_commands_ci_runs():
     figures' check and the tests, each from a fresh virtual environment."""
     commands = [line for line in readme().splitlines() if line.startswith("python3 -m venv .venv && ")]
     assert len(commands) == 2, commands
-    assert commands[0].endswith("cobra-ref figures --check") and commands[1].endswith("python -m pytest")
+    assert commands[0].endswith("cobra-ref figures --check") and commands[1].endswith("python -m pytest -n auto")
 
 
 # ------------------------------------------------------------------------------------------- plot_run

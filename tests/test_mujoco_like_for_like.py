@@ -10,11 +10,10 @@ sliding box decelerates at mu g, an explicit damper is stable below 2 / rate.
 import numpy as np
 import pytest
 
-from bodies import BALL_RADIUS, BOX_MASS, BOX_SIDE, GRAVITY, at_height, ball, box, run
+from bodies import BALL_RADIUS, BOX_MASS, BOX_SIDE, GRAVITY, at_height, ball, box, pressed_box_state, run
 import cobra_ref as cr
 from cobra_ref.gaits import gait
 from cobra_ref.mjcf import IMPEDANCE, TIMESTEP, inverse_weights, pair_parameters
-from cobra_ref.start import BoxPlacement, placed_state
 
 mujoco = pytest.importorskip("mujoco", reason="the MuJoCo comparison needs the optional dependency mujoco")
 
@@ -68,7 +67,7 @@ def test_mujocos_normal_force_is_our_spring_damper(cobra, rng):
     1e-2 of the spring-damper's (at rest a_c = 0: the resting case below)."""
     m = mujoco.MjModel.from_xml_string(cr.to_mjcf(cobra))
     d = mujoco.MjData(m)
-    q = placed_state(cobra, gait("C"), BoxPlacement(gap=-0.005))
+    q = pressed_box_state(cobra, gait("C"), 0.005)
     q[2] -= 0.005
     q[cobra.q_idx[cobra.boxes[0].body].start + 2] -= 2e-4
     for scale in (0.0, 0.01, 0.1):

@@ -116,10 +116,10 @@ def test_exported_contact_pairs_have_the_same_friction_as_the_contact_solve(cobr
     """Each pair of geoms has its own <pair> (assumption A27), so the contacts MuJoCo finds carry
     exactly the contact solve's coefficients: robot-ground and box-ground 1.0, robot-box 0.5 (A22)."""
     from cobra_ref.gaits import RollingGait
-    from cobra_ref.start import BoxPlacement, placed_state
+    from bodies import pressed_box_state
 
     m, d = mj
-    q = placed_state(cobra, RollingGait(), BoxPlacement(gap=-0.03))  # box 30 mm into the middle links
+    q = pressed_box_state(cobra, RollingGait(), 0.03)  # box 30 mm into the middle links
     q[2] -= 0.0015  # robot spheres 0.5 mm into the ground
     d.qpos[:] = q
     d.qvel[:] = 0
