@@ -141,3 +141,14 @@ def test_push_options_are_checked_by_the_command_lines_rules(field, value, error
 
     with pytest.raises(error, match=field):
         replace(TINY, **{field: value})
+
+
+def test_a_plant_at_a_finer_dt_executes_the_plan_and_replays_it():
+    # the plant steps at 1 ms while the rollouts predict at 2 ms: two worlds; the replay is the plant's
+    from dataclasses import replace
+
+    options = replace(TINY, plant_dt=0.001, budget=0.1)
+    result = push(options, SerialExecutor())
+    assert result.trajectory.dt == 0.001 and len(result.trajectory.tau) == 100
+    again = replay(result.plan.to_dict(), options)
+    np.testing.assert_array_equal(again.q, result.trajectory.q)

@@ -46,7 +46,10 @@ def add_parsers(sub) -> None:
                    help=f"the push ends with the box within this of the goal [m] (default {d.tolerance:g})")
     p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=0, help="seed of the sampling noise (default 0)")
     p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=DEFAULT_DT,
-                   help=f"time step of the plant and the rollouts [s] (default {DEFAULT_DT * 1e3:g} ms)")
+                   help=f"time step of the rollouts, and of the plant unless --plant-dt [s] (default {DEFAULT_DT * 1e3:g} ms)")
+    p.add_argument("--plant-dt", type=RULES["dt"].arg("--plant-dt"), default=None,
+                   help="time step of the plant that executes the plan [s] (default: --dt), e.g. 0.0005: the plan "
+                        "then runs in a finer world than the one it was predicted in")
     add_model_options(p)
     p.add_argument("--workers", type=RULES["workers"].arg("--workers"), default=None,
                    help="worker processes for the rollouts (default: the cores; 1 = serial, in this process)")
@@ -131,7 +134,7 @@ def _options(args):
 
     return PushOptions(goal=args.goal if args.goal is not None else (0.25, 0.0), via=tuple(args.via), budget=args.budget, period=args.period,
                        horizon=args.horizon, samples=args.samples, tolerance=args.tolerance, seed=args.seed,
-                       settings=StepSettings(dt=args.dt), cobra=model_parameters(args))
+                       settings=StepSettings(dt=args.dt), cobra=model_parameters(args), plant_dt=args.plant_dt)
 
 
 @contextlib.contextmanager

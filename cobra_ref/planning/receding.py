@@ -24,7 +24,8 @@ stepper's memory and the plan so far):
    effort, impact and torque-limit terms (:mod:`cobra_ref.planning.cost`) over the horizon;
 3. the best candidate's first primitive is appended to the plan and the plant runs one period.
 
-The target is the next waypoint until the box passes within ``via_tolerance`` of it, then the goal.
+The plant may run at another time step than the rollouts (``plant_dt``: the plan must not be
+tuned to its own model). The target is the next waypoint until the box passes within ``via_tolerance`` of it, then the goal.
 The push ends when the box is within ``tolerance`` of the goal at the end of a period in which
 the robot stopped (the box at rest), or when the budget of simulated time is spent. The plant is
 one ``simulate.Run`` advanced period by period: replaying the plan (``replay``) takes the same
@@ -74,6 +75,7 @@ class PushOptions:
     w_impact: float = 1.0  # [m] per unit of I: claim NI's 1 % of the robot's weight costs 1 cm
     w_tau: float = 0.1  # [m] per unit of P_tau
     w_approach: float = 0.0  # per metre of a; 0.5 did not help two goals outside C's cone (docs/planning.md)
+    plant_dt: float | None = None  # [s] the plant's time step (None: the rollouts' settings.dt)
 
     def __post_init__(self):
         """Each field by the command line's rule (``infra.validation``): an ``infra.arguments``
@@ -92,6 +94,14 @@ class PushOptions:
         arguments.instance("start", self.start, Primitive, "Primitive('C', 0.5, 0.5)")
         arguments.instance("settings", self.settings, StepSettings, "StepSettings(dt=0.001)")
         arguments.instance("cobra", self.cobra, CobraParameters, "CobraParameters()")
+        if self.plant_dt is not None:
+            put("plant_dt", arguments.number("plant_dt", self.plant_dt, RULES["dt"]))
+
+    @property
+    def plant_settings(self) -> StepSettings:
+        """The plant's ``StepSettings``: the rollouts' with ``plant_dt`` (another world than the one
+        the planner predicts with, when it differs)."""
+        return self.settings if self.plant_dt is None else replace(self.settings, dt=self.plant_dt)
 
 
 def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: bool = True) -> list:
@@ -193,13 +203,14 @@ def push(options: PushOptions, executor=None, progress=None) -> PushResult:
     o = options
     model = cobra_model(o.cobra)
     plan = PlanReference(o.start)
-    q0, qd0 = initial_state(model, plan, o.settings)
+    plant = o.plant_settings
+    q0, qd0 = initial_state(model, plan, plant)
     box = model.q_idx[model.boxes[0].body].start
     box0 = q0[box:box + 2].copy()
     targets = [tuple(box0 + np.asarray(w, dtype=float)) for w in tuple(o.via) + (o.goal,)]
-    n_period = int(round(o.period / o.settings.dt))
+    n_period = int(round(o.period / plant.dt))
     n_budget = int(round(o.budget / o.period))
-    run = Run(model, o.settings, q0, qd0, "fast", n_period * n_budget)
+    run = Run(model, plant, q0, qd0, "fast", n_period * n_budget)
     cycles, last, moving, aim = [], o.start, o.start, 0
     start, reason, reached = time.perf_counter(), "budget spent", False
 
@@ -239,8 +250,9 @@ def push(options: PushOptions, executor=None, progress=None) -> PushResult:
 
 def _rollouts(executor, plan: PlanReference, run: Run, pairs: list, target, options: PushOptions) -> list:
     """``candidate_cost`` of every pair from the state ``run`` has reached, in order (through ``executor``)."""
-    jobs = [Rollout(plan.to_dict(), pair, run.t, run.q, run.qd, run.stepping.memory, target, options)
-            for pair in pairs]
+    # the plant's stepper memory (its last velocity, its impulses) holds for rollouts at its own dt only
+    memory = run.stepping.memory if run.settings.dt == options.settings.dt else None
+    jobs = [Rollout(plan.to_dict(), pair, run.t, run.q, run.qd, memory, target, options) for pair in pairs]
     return list(executor.map(candidate_cost, jobs)) if executor is not None else [candidate_cost(j) for j in jobs]
 
 
@@ -262,7 +274,8 @@ def push_record(result: PushResult, options: PushOptions) -> dict:
             "options": {"goal": list(o.goal), "via": [list(v) for v in o.via], "period": o.period,
                         "horizon": o.horizon, "budget": o.budget, "tolerance": o.tolerance,
                         "via_tolerance": o.via_tolerance, "samples": o.samples, "seed": o.seed,
-                        "start": o.start.to_dict(), "settings": asdict(o.settings), "cobra": asdict(o.cobra),
+                        "start": o.start.to_dict(), "settings": asdict(o.settings), "plant_dt": o.plant_dt,
+                        "cobra": asdict(o.cobra),
                         "weights": {"effort": o.w_effort, "impact": o.w_impact, "tau": o.w_tau,
                                     "approach": o.w_approach}},
             "plan": result.plan.to_dict(), "cycles": result.cycles, "goal_world": list(result.goal_world),
@@ -283,7 +296,7 @@ def load_push(record: dict) -> tuple[dict, PushOptions]:
                           via_tolerance=o["via_tolerance"], samples=o["samples"], seed=o["seed"],
                           start=Primitive(**o["start"]), settings=StepSettings(**o["settings"]), cobra=cobra,
                           w_effort=o["weights"]["effort"], w_impact=o["weights"]["impact"], w_tau=o["weights"]["tau"],
-                          w_approach=o["weights"]["approach"])
+                          w_approach=o["weights"]["approach"], plant_dt=o.get("plant_dt"))
     return record["plan"], options
 
 
@@ -293,10 +306,11 @@ def replay(plan_dict: dict, options: PushOptions):
     o = options
     model = cobra_model(o.cobra)
     plan = PlanReference.from_dict(plan_dict)
-    q0, qd0 = initial_state(model, PlanReference(plan.start), o.settings)
-    n_period = int(round(o.period / o.settings.dt))
+    plant = o.plant_settings
+    q0, qd0 = initial_state(model, PlanReference(plan.start), plant)
+    n_period = int(round(o.period / plant.dt))
     n = n_period * len(plan.primitives)
-    run = Run(model, o.settings, q0, qd0, "fast", n)
+    run = Run(model, plant, q0, qd0, "fast", n)
     # period by period, as the plant ran (the reference is the whole plan: it gives the same values)
     for _ in range(len(plan.primitives)):
         run.advance(plan, n_period)
