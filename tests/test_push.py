@@ -152,3 +152,20 @@ def test_a_plant_at_a_finer_dt_executes_the_plan_and_replays_it():
     assert result.trajectory.dt == 0.001 and len(result.trajectory.tau) == 100
     again = replay(result.plan.to_dict(), options)
     np.testing.assert_array_equal(again.q, result.trajectory.q)
+
+
+def test_mujoco_as_the_plant_executes_the_plan_and_replays_it():
+    # the planner predicts with cobra_ref (2 ms), MuJoCo executes at its 0.1 ms step and is read back
+    pytest.importorskip("mujoco")
+    from dataclasses import replace
+
+    from cobra_ref.reproduce.mujoco_plant import MujocoPlant
+
+    options = replace(TINY, plant="mujoco", budget=0.1)
+    result = push(options, SerialExecutor(), plant=MujocoPlant)
+    assert result.trajectory.meta["plant"] == "mujoco" and len(result.trajectory.tau) == 50
+    assert np.isfinite(result.trajectory.q).all()
+    again = replay(result.plan.to_dict(), options, plant=MujocoPlant)
+    np.testing.assert_array_equal(again.q, result.trajectory.q)
+    with pytest.raises(ValueError, match="needs its factory"):
+        push(options, SerialExecutor())

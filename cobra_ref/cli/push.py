@@ -47,6 +47,9 @@ def add_parsers(sub) -> None:
     p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=0, help="seed of the sampling noise (default 0)")
     p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=DEFAULT_DT,
                    help=f"time step of the rollouts, and of the plant unless --plant-dt [s] (default {DEFAULT_DT * 1e3:g} ms)")
+    p.add_argument("--plant", choices=("cobra_ref", "mujoco"), default="cobra_ref",
+                   help="what executes the plan: cobra_ref (default) or MuJoCo on the exported model at its 0.1 ms "
+                        "step (the planner still predicts with cobra_ref; the state is read back every period)")
     p.add_argument("--plant-dt", type=RULES["dt"].arg("--plant-dt"), default=None,
                    help="time step of the plant that executes the plan [s] (default: --dt), e.g. 0.0005: the plan "
                         "then runs in a finer world than the one it was predicted in")
@@ -87,7 +90,7 @@ def cmd_push(args) -> int:
     with c_stdout_silenced():
         try:
             with _executor(args.workers) as executor:
-                result = push(options, executor, progress=err)
+                result = push(options, executor, progress=err, plant=_plant_factory(options.plant))
         except KeyboardInterrupt as exc:
             result, stop = getattr(exc, "result", None), exc
             if result is None:
@@ -118,7 +121,7 @@ def _replay(args) -> int:
     except (OSError, ValueError, KeyError, TypeError, RecursionError) as exc:
         raise fail(f"--replay {args.replay}: {exc}") from None
     with c_stdout_silenced():
-        traj = replay(plan, options)
+        traj = replay(plan, options, plant=_plant_factory(options.plant))
     try:
         traj.to_npz(args.out)
     except OSError as exc:
@@ -134,7 +137,8 @@ def _options(args):
 
     return PushOptions(goal=args.goal if args.goal is not None else (0.25, 0.0), via=tuple(args.via), budget=args.budget, period=args.period,
                        horizon=args.horizon, samples=args.samples, tolerance=args.tolerance, seed=args.seed,
-                       settings=StepSettings(dt=args.dt), cobra=model_parameters(args), plant_dt=args.plant_dt)
+                       settings=StepSettings(dt=args.dt), cobra=model_parameters(args), plant_dt=args.plant_dt,
+                       plant=args.plant)
 
 
 @contextlib.contextmanager
@@ -161,10 +165,23 @@ def _benchmark(args) -> int:
 
     with c_stdout_silenced():
         with _executor(args.workers) as executor:
-            rows = run_benchmark(_options(args), executor, progress=err, keep=keep)
+            rows = run_benchmark(_options(args), executor, progress=err, keep=keep,
+                                 plant=_plant_factory(args.plant))
     if args.figure:
         from ..viz.push_paths import plot_pushes
 
         plot_pushes(rows, args.figure)
     print(json.dumps(summary(rows)))
     return 0
+
+
+def _plant_factory(name: str):
+    """The plant of ``--plant``: None (the planner's own ``simulate.Run``) or MuJoCo's."""
+    if name != "mujoco":
+        return None
+    from ..reproduce.mujoco_check import mujoco_available
+    from ..reproduce.mujoco_plant import MujocoPlant
+
+    if not mujoco_available():
+        raise fail("--plant mujoco needs MuJoCo: pip install mujoco (or the mujoco extra)")
+    return MujocoPlant

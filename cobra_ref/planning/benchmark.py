@@ -36,12 +36,13 @@ GOALS = tuple((f"{d:03d}deg-{r:.2f}m", _direction(d, r), ()) for r in (0.25, 0.5
 )
 
 
-def run_benchmark(base: PushOptions, executor=None, tasks=GOALS, progress=None, keep=None) -> list:
+def run_benchmark(base: PushOptions, executor=None, tasks=GOALS, progress=None, keep=None, plant=None) -> list:
     """One row per task (module docstring), in order; ``keep(rows)`` is called after each task (to
-    write what is done), ``progress(line)`` gets the planner's lines and one per task."""
+    write what is done), ``progress(line)`` gets the planner's lines and one per task; ``plant``:
+    as ``receding.push``'s."""
     rows = []
     for name, goal, via in tasks:
-        result = push(replace(base, goal=tuple(goal), via=tuple(via)), executor, progress)
+        result = push(replace(base, goal=tuple(goal), via=tuple(via)), executor, progress, plant)
         record = push_record(result, replace(base, goal=tuple(goal), via=tuple(via)))
         box = result.trajectory.box_pose[:, :2]
         start = box[0]

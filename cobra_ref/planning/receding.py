@@ -53,6 +53,7 @@ from .primitives import ROLLING, PlanReference, Primitive
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
 NEAR = 0.05  # [m] a stop for the whole horizon is a candidate only with the box this near its target
+PLANTS = ("cobra_ref", "mujoco")
 
 
 @dataclass(frozen=True)
@@ -76,6 +77,7 @@ class PushOptions:
     w_tau: float = 0.1  # [m] per unit of P_tau
     w_approach: float = 0.0  # per metre of a; 0.5 did not help two goals outside C's cone (docs/planning.md)
     plant_dt: float | None = None  # [s] the plant's time step (None: the rollouts' settings.dt)
+    plant: str = "cobra_ref"  # the plant's simulator: "cobra_ref" (``simulate.Run``) or "mujoco" (``push``'s plant=)
 
     def __post_init__(self):
         """Each field by the command line's rule (``infra.validation``): an ``infra.arguments``
@@ -96,6 +98,7 @@ class PushOptions:
         arguments.instance("cobra", self.cobra, CobraParameters, "CobraParameters()")
         if self.plant_dt is not None:
             put("plant_dt", arguments.number("plant_dt", self.plant_dt, RULES["dt"]))
+        arguments.choice("plant", self.plant, PLANTS)
 
     @property
     def plant_settings(self) -> StepSettings:
@@ -194,23 +197,24 @@ class PushResult:
     wall_time: float
 
 
-def push(options: PushOptions, executor=None, progress=None) -> PushResult:
+def push(options: PushOptions, executor=None, progress=None, plant=None) -> PushResult:
     """Push the box to ``options.goal`` (module docstring); ``progress(line)`` gets one line per period.
 
-    ``executor``: a ``concurrent.futures.Executor`` for the rollouts (None: in this process). A
-    Ctrl-C ends the push after the period under way and keeps what was executed.
+    ``executor``: a ``concurrent.futures.Executor`` for the rollouts (None: in this process).
+    ``plant(model, settings, q0, qd0, capacity)``: what executes the plan (default a
+    ``simulate.Run``; for ``options.plant`` = "mujoco", ``reproduce.mujoco_plant.MujocoPlant``). A
+    Ctrl-C ends the push and keeps what was executed.
     """
-    o = options
+    o, settings = options, options.plant_settings
     model = cobra_model(o.cobra)
     plan = PlanReference(o.start)
-    plant = o.plant_settings
-    q0, qd0 = initial_state(model, plan, plant)
+    q0, qd0 = initial_state(model, plan, settings)
     box = model.q_idx[model.boxes[0].body].start
     box0 = q0[box:box + 2].copy()
     targets = [tuple(box0 + np.asarray(w, dtype=float)) for w in tuple(o.via) + (o.goal,)]
-    n_period = int(round(o.period / plant.dt))
+    n_period = int(round(o.period / settings.dt))
     n_budget = int(round(o.budget / o.period))
-    run = Run(model, plant, q0, qd0, "fast", n_period * n_budget)
+    run = _plant(o, plant)(model, settings, q0, qd0, n_period * n_budget)
     cycles, last, moving, aim = [], o.start, o.start, 0
     start, reason, reached = time.perf_counter(), "budget spent", False
 
@@ -274,7 +278,7 @@ def push_record(result: PushResult, options: PushOptions) -> dict:
             "options": {"goal": list(o.goal), "via": [list(v) for v in o.via], "period": o.period,
                         "horizon": o.horizon, "budget": o.budget, "tolerance": o.tolerance,
                         "via_tolerance": o.via_tolerance, "samples": o.samples, "seed": o.seed,
-                        "start": o.start.to_dict(), "settings": asdict(o.settings), "plant_dt": o.plant_dt,
+                        "start": o.start.to_dict(), "settings": asdict(o.settings), "plant_dt": o.plant_dt, "plant": o.plant,
                         "cobra": asdict(o.cobra),
                         "weights": {"effort": o.w_effort, "impact": o.w_impact, "tau": o.w_tau,
                                     "approach": o.w_approach}},
@@ -296,21 +300,32 @@ def load_push(record: dict) -> tuple[dict, PushOptions]:
                           via_tolerance=o["via_tolerance"], samples=o["samples"], seed=o["seed"],
                           start=Primitive(**o["start"]), settings=StepSettings(**o["settings"]), cobra=cobra,
                           w_effort=o["weights"]["effort"], w_impact=o["weights"]["impact"], w_tau=o["weights"]["tau"],
-                          w_approach=o["weights"]["approach"], plant_dt=o.get("plant_dt"))
+                          w_approach=o["weights"]["approach"], plant_dt=o.get("plant_dt"),
+                          plant=o.get("plant", "cobra_ref"))
     return record["plan"], options
 
 
-def replay(plan_dict: dict, options: PushOptions):
+def _plant(options: PushOptions, factory):
+    """The plant factory of ``push`` and ``replay``: ``factory``, or a ``simulate.Run`` for the cobra_ref plant."""
+    if factory is not None:
+        return factory
+    if options.plant != "cobra_ref":
+        raise arguments.ArgumentError(f"plant = {options.plant!r} needs its factory: push(..., plant=MujocoPlant) "
+                                      "with cobra_ref.reproduce.mujoco_plant.MujocoPlant")
+    return lambda model, settings, q0, qd0, capacity: Run(model, settings, q0, qd0, "fast", capacity)
+
+
+def replay(plan_dict: dict, options: PushOptions, plant=None):
     """The executed run of a plan (``PushResult.plan.to_dict()``) replayed from the same start: the
-    same steps as ``push`` took, bit for bit."""
+    same steps as ``push`` took, bit for bit (``plant``: as ``push``'s)."""
     o = options
     model = cobra_model(o.cobra)
     plan = PlanReference.from_dict(plan_dict)
-    plant = o.plant_settings
-    q0, qd0 = initial_state(model, PlanReference(plan.start), plant)
-    n_period = int(round(o.period / plant.dt))
+    plant_settings = o.plant_settings
+    q0, qd0 = initial_state(model, PlanReference(plan.start), plant_settings)
+    n_period = int(round(o.period / plant_settings.dt))
     n = n_period * len(plan.primitives)
-    run = Run(model, plant, q0, qd0, "fast", n)
+    run = _plant(o, plant)(model, plant_settings, q0, qd0, n)
     # period by period, as the plant ran (the reference is the whole plan: it gives the same values)
     for _ in range(len(plan.primitives)):
         run.advance(plan, n_period)
