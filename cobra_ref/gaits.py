@@ -192,6 +192,8 @@ def gait(name: str, **params):
 
 
 def gait_params(g) -> dict:
-    """The free parameters of a gait object as a JSON-ready dict (the inverse of ``gait``).
+    """The free parameters of a gait object as a JSON-ready dict (the inverse of ``gait``); an
+    ``infra.arguments.ArgumentTypeError`` for anything that is not a gait of ``GAITS``.
     """
+    arguments.instance("g", g, (RollingGait, SidewindingGait), "gait('C')")
     return {f: getattr(g, f) for f in g.__dataclass_fields__ if f != "shape"}

@@ -82,8 +82,10 @@ def to_mjcf(model: Model, timestep: float = TIMESTEP) -> str:
     (a ``ValidationError`` names the value otherwise); the default ``TIMESTEP`` is the one
     measured stable and converged for COBRA and the box (``docs/mujoco.md``).
     """
+    from .infra import arguments
     from .infra.validation import RULES
 
+    arguments.instance("model", model, Model, "cobra_model()")
     timestep = RULES["timestep"].check(timestep, "timestep")
     root = ET.Element("mujoco", model=model.name)
     root.append(ET.Comment(" written by cobra_ref.mjcf.to_mjcf; q/qd order identical to cobra_ref "))

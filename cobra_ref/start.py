@@ -102,6 +102,7 @@ def initial_state(model: Model, reference, settings: StepSettings = StepSettings
     """
     check_run_arguments(model, reference, settings, stepper)
     arguments.instance("placement", placement, BoxPlacement, "BoxPlacement(gap=0.05)")
+    arguments.instance("settle", settle, (bool, np.bool_), "True or False")
     q = placed_state(model, reference, placement)
     qd = np.zeros(model.nv)
     if settle:

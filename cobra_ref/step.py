@@ -39,6 +39,7 @@ import numpy as np
 from .compliance import CONTACT_LAWS, JOINT_SERVOS, LAWS, SERVOS
 from .contact import BOX_GROUND, ROBOT_BOX, ROBOT_GROUND, Contacts, contact_jacobian, find_contacts
 from .dynamics import bias_force, crba, potential_energy
+from .infra import arguments
 from .infra.validation import DEFAULT_DT, RULES, check_choice
 from .kinematics import forward_kinematics, integrate
 from .least_action import LeastAction, LeastActionInfo, delassus, kkt_residuals, solve_least_action
@@ -72,11 +73,12 @@ class StepSettings:
     def __post_init__(self):
         """Check every setting by its rule (:mod:`cobra_ref.infra.validation`): dt within
         [DT_MIN, DT_MAX] (A14), a known contact law and servo, a margin in [0, 1] m; a
-        ``ValidationError`` (a ValueError) names the field, the value and the allowed range."""
-        RULES["dt"].check(self.dt, "dt")
+        ``ValidationError`` (a ValueError) names the field, the value and the allowed range; a value
+        that is not a number is an ``infra.arguments.ArgumentTypeError`` (a TypeError)."""
+        arguments.number("dt", self.dt, RULES["dt"])
         check_choice("contact", self.contact, LAWS)
         check_choice("servo", self.servo, SERVOS)
-        RULES["margin"].check(self.margin, "margin")
+        arguments.number("margin", self.margin, RULES["margin"])
 
     @property
     def law(self):

@@ -19,7 +19,8 @@ import pytest
 
 from cobra_ref import (ArgumentError, ArgumentTypeError, BoxPlacement, StepSettings, Trajectory, cobra_model, gait,
                        initial_state, make_stepper, simulate)
-from cobra_ref.gaits import GaitError
+from cobra_ref.gaits import GaitError, gait_params
+from cobra_ref.mjcf import to_mjcf
 from cobra_ref.planning import problem as sh
 from cobra_ref.reference import ReferenceError, load_reference
 
@@ -68,6 +69,13 @@ BAD = [
     ("simulate-stepper", lambda c: simulate(c.model, c.ref, 0.02, stepper="quick"), V,
      ["stepper = 'quick' is unknown", "fast, reference"]),
     ("simulate-progress", lambda c: simulate(c.model, c.ref, 0.02, progress=1), T, ["progress = 1 is not callable"]),
+    # the settings, the start's settle, the MJCF and a gait's parameters
+    ("settings-dt-str", lambda c: StepSettings(dt="0.001"), T, ["dt = '0.001' is not a number"]),
+    ("settings-margin-list", lambda c: StepSettings(margin=[0.01]), T, ["margin = [0.01] is not a number"]),
+    ("initial-state-settle-str", lambda c: initial_state(c.model, c.ref, StepSettings(dt=0.002), settle="no"), T,
+     ["settle = 'no' is a str", "True or False"]),
+    ("to-mjcf-None", lambda c: to_mjcf(None), T, ["model = None", "a Model"]),
+    ("gait-params-None", lambda c: gait_params(None), T, ["g = None", "RollingGait or SidewindingGait"]),
     # initial_state and its BoxPlacement
     ("box-gap-negative", lambda c: BoxPlacement(gap=-1), V, ["box_gap = -1 m is out of range", "[0, 1] m"]),
     ("box-gap-nan", lambda c: BoxPlacement(gap=float("nan")), V, ["box_gap = nan is not finite", "[0, 1] m"]),

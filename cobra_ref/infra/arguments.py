@@ -85,13 +85,14 @@ def duration_steps(duration, dt: float, name: str = "duration", error: type = Ar
         raise error(str(exc)) from None
 
 
-def instance(name: str, value, kind: type, example: str = "", optional: bool = False):
-    """``value`` if it is a ``kind`` (or None with ``optional``), else an ``ArgumentTypeError``
-    naming the argument, its value and ``example`` (how to make one)."""
+def instance(name: str, value, kind, example: str = "", optional: bool = False):
+    """``value`` if it is a ``kind`` (a type or a tuple of types; or None with ``optional``), else an
+    ``ArgumentTypeError`` naming the argument, its value and ``example`` (how to make one)."""
     if isinstance(value, kind) or (optional and value is None):
         return value
-    allowed = f"a {kind.__name__}{' or None' if optional else ''}{f', e.g. {example}' if example else ''}"
-    raise ArgumentTypeError(f"{name} = {shown(value)} is a {type(value).__name__}, not a {kind.__name__} "
+    kinds = " or ".join(k.__name__ for k in (kind if isinstance(kind, tuple) else (kind,)))
+    allowed = f"a {kinds}{' or None' if optional else ''}{f', e.g. {example}' if example else ''}"
+    raise ArgumentTypeError(f"{name} = {shown(value)} is a {type(value).__name__}, not a {kinds} "
                             f"(allowed: {allowed})")
 
 
