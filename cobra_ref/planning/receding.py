@@ -40,6 +40,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from ..infra import arguments
+from ..infra.executors import SerialExecutor
 from ..infra.validation import RULES
 from ..params import CobraParameters
 from ..provenance import code_version
@@ -167,7 +168,7 @@ def candidate_cost(job: Rollout) -> dict:
     effort = o.settings.dt * float(np.sum(traj.tau**2)) / (traj.tau.shape[1] * o.cobra.tau_max**2 * duration)
     impact = impact_term(traj, robot_weight(model), duration)
     p_tau = o.settings.dt * float(np.sum(np.maximum(traj.steps["tau_excess"], 0.0))) / (o.cobra.tau_max * duration)
-    approach = pushing_distance(model, traj.q[-1], target, o.cobra)
+    approach = pushing_distance(model, traj.q[-1], target, o.cobra) if o.w_approach else 0.0
     cost = d_end + 0.5 * d_mid + o.w_approach * approach + o.w_effort * effort + o.w_impact * impact + o.w_tau * p_tau
     return {"cost": cost, "distance": d_end, "box": traj.box_pose[-1, :2].tolist(), "error": None}
 
@@ -256,8 +257,9 @@ def _rollouts(executor, plan: PlanReference, run: Run, pairs: list, target, opti
     """``candidate_cost`` of every pair from the state ``run`` has reached, in order (through ``executor``)."""
     # the plant's stepper memory (its last velocity, its impulses) holds for rollouts at its own dt only
     memory = run.stepping.memory if run.settings.dt == options.settings.dt else None
-    jobs = [Rollout(plan.to_dict(), pair, run.t, run.q, run.qd, memory, target, options) for pair in pairs]
-    return list(executor.map(candidate_cost, jobs)) if executor is not None else [candidate_cost(j) for j in jobs]
+    plan_so_far, q, qd = plan.to_dict(), run.q, run.qd  # the same for every candidate
+    jobs = [Rollout(plan_so_far, pair, run.t, q, qd, memory, target, options) for pair in pairs]
+    return list((executor or SerialExecutor()).map(candidate_cost, jobs))
 
 
 def _name(p: Primitive) -> str:
