@@ -76,7 +76,7 @@ class PushOptions:
     w_effort: float = 0.005  # [m] per unit of E
     w_impact: float = 1.0  # [m] per unit of I: claim NI's 1 % of the robot's weight costs 1 cm
     w_tau: float = 0.1  # [m] per unit of P_tau
-    w_approach: float = 0.0  # per metre of a; 0.5 did not help two goals outside C's cone (docs/planning.md)
+    w_approach: float = 0.0  # per metre of a; off by default (docs/planning.md, "What it does now")
     plant_dt: float | None = None  # [s] the plant's time step (None: the rollouts' settings.dt)
     plant: str = "cobra_ref"  # the plant's simulator: "cobra_ref" (``simulate.Run``) or "mujoco" (``push``'s plant=)
 
