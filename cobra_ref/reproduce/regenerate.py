@@ -58,6 +58,8 @@ import numpy as np
 from ..infra.executors import own_pool
 from ..infra.output import write_text
 from ..infra.validation import DEFAULT_DT
+from .claims_map import MAP_MEMBERS, check_entries, judge, map_specs, where_lines
+from .map_figure import write_map
 from .mujoco_job import MUJOCO_MEMBERS, mujoco_rows, mujoco_submit
 from .optima import (DIRECTIONS, OPTIMIZED_DIR, optimization_figures, optimized_files, optimized_params,
                      reoptimize, replays_submit, shown)
@@ -178,7 +180,8 @@ class FiguresOptions:
     ``params`` ({gait: gait parameters}; None = the optima in ``optimized_dir``, or the defaults
     without one), ``optimized_dir`` (None: the defaults, no optimization figures),
     ``reoptimize_all`` (step 0: re-run the optimizer into ``OUT/optimized/`` and use those
-    optima). ValueError for a bad ``n_members``."""
+    optima), ``claims_map`` (step 4, the verdict map over the paper's unknowns; None: with a full
+    run, not with a quick one). ValueError for a bad ``n_members``."""
 
     quick: bool = False
     force: bool = False
@@ -188,10 +191,13 @@ class FiguresOptions:
     params: dict | None = None
     optimized_dir: str | None = OPTIMIZED_DIR
     reoptimize_all: bool = False
+    claims_map: bool | None = None
 
     def __post_init__(self):
         if self.mujoco is None:
             object.__setattr__(self, "mujoco", not self.quick)
+        if self.claims_map is None:
+            object.__setattr__(self, "claims_map", not self.quick)
         if self.n_members is None:
             object.__setattr__(self, "n_members", QUICK_MEMBERS if self.quick else MEMBERS)
         n = self.n_members
@@ -213,6 +219,7 @@ class FiguresJob:
     files_opt: dict  # {gait: params JSON} of the gaits run with their optima
     params: dict  # {gait: gait parameters} of those gaits
     start: float  # time.perf_counter() at the start of ``regenerate``
+    map_specs: dict  # {set-up: {gait: [RunSpec per member]}} of the verdict map (empty without it)
 
     @property
     def every(self) -> list:
@@ -251,13 +258,17 @@ def regenerate(out_dir: str = "figures", options: FiguresOptions = FiguresOption
             say(progress, "default gait parameters (assumption A10) for every gait")
     specs = ensemble_specs(options.gaits, options.n_members, options.quick, QUICK_DT if options.quick else DEFAULT_DT,
                            params)
+    mapped = map_specs(specs, n_members=min(MAP_MEMBERS, options.n_members)) if options.claims_map else {}
     # sidewinding first among runs of one duration: its box-free placement run makes it the longest
     every = sorted((spec for runs in specs.values() for spec in runs), key=lambda s: s.gait != "sidewinding")
+    every += [spec for per in mapped.values() for runs in per.values() for spec in runs]
     note = smoke_note(options)
     say(progress, (f"{note}\n" if note else "") + f"simulating {len(specs)} gaits x {options.n_members} member(s): "
-                  f"member 0 {every[0].duration:g} s, the others {window(options.quick):g} s (cache: {cache_dir})")
+                  f"member 0 {every[0].duration:g} s, the others {window(options.quick):g} s"
+                  + (f"; the verdict map: {len(mapped) - 1} more set-ups" if mapped else "") + f" (cache: {cache_dir})")
     runs = run_all(every, cache_dir, force=options.force, workers=workers, progress=progress, executor=executor)
-    job = FiguresJob(options, out_dir, cache_dir, optimized_dir, progress, specs, runs, files_opt, params, start)
+    job = FiguresJob(options, out_dir, cache_dir, optimized_dir, progress, specs, runs, files_opt, params, start,
+                     mapped)
     # the MuJoCo comparison and the optima's replays run on the executor (default: a process pool of
     # ``workers``, ended at once on an interrupt) while this process draws the figures
     with nullcontext(executor) if executor is not None else own_pool(workers) as side:
@@ -288,14 +299,22 @@ def _finish(job: FiguresJob, side) -> dict:
         settings = _report_settings(job, results)
         if opts.mujoco:
             report += mujoco_rows(pending, job.out_dir, job.progress, files)
-    claims_json = marked_json({"claims": clean(report)}, note) if note else json.dumps(clean(report), indent=1)
+        claims_map = judge(job.map_specs, job.runs, job.window) if job.map_specs else None
+        if claims_map:
+            files += write_map(claims_map, job.out_dir, note)
+    # the map's cells join the report that --check compares; claims.md names where each claim holds
+    checked = report + (check_entries(claims_map) if claims_map else [])
+    claims_json = marked_json({"claims": clean(checked)}, note) if note else json.dumps(clean(checked), indent=1)
+    where = ("\n" + "\n".join(where_lines(claims_map)) + "\n(the map: claims_map.md, fig_claims_map.png)\n"
+             if claims_map else "")
     paths = {"claims.json": claims_json,
-             "claims.md": (f"**{note}**\n\n" if note else "") + claims_mod.to_markdown(report, summaries, settings),
+             "claims.md": (f"**{note}**\n\n" if note else "") + claims_mod.to_markdown(report, summaries, settings)
+             + where,
              "summary.json": marked_json(clean({"gaits": summaries, "ensemble": ensemble, "settings": settings}), note)}
     for fname, text in paths.items():
         write_text(os.path.join(job.out_dir, fname), text)
         files.append(os.path.join(job.out_dir, fname))
-    return {"files": files, "claims": clean(report), "seconds": time.perf_counter() - job.start}
+    return {"files": files, "claims": clean(checked), "seconds": time.perf_counter() - job.start}
 
 
 def smoke_note(options: FiguresOptions) -> str | None:

@@ -26,6 +26,10 @@ Box placement per gait (assumption A9, extended):
   (``placement.travel_placement``, assumption A31; computed with the run, its direction and
   clearance reported in the trajectory's ``meta``).
 
+A spec with ``placement = "travel"`` places every gait's box by the travelling rule (A31), and
+``box_size`` / ``box_mass`` replace the box of ``CobraParameters`` (the verdict map over the
+paper's unknowns, ``claims_map``); at their defaults (None, "per gait") they add nothing to the key.
+
 An ensemble member's box is placed by the same rule as its nominal run's (for sidewinding, the
 nominal run's box-free placement, ``nominal_placement``), then shifted by ``box_shift`` and
 turned by ``box_turn`` (``start.placed_state``); its frictions are scaled by ``mu_scale``.
@@ -60,13 +64,15 @@ from .cache import read_trajectory, seal_trajectory, verified
 from .ensemble import Member
 
 PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
+PLACEMENTS = ("per gait", "travel")  # the box placement rules: A9 (A31 for sidewinding), or A31 for every gait
 
 
 
 @dataclass(frozen=True)
 class RunSpec:
     """One gait run: the gait, its parameters (empty = the defaults of assumption A10), the settings,
-    and the ensemble member (None: the nominal run, ``ensemble.Member``)."""
+    the ensemble member (None: the nominal run, ``ensemble.Member``), and the box: its size [m] and
+    mass [kg] (None: ``CobraParameters``'), its placement rule (``PLACEMENTS``, module docstring)."""
 
     gait: str
     duration: float = 10.0
@@ -74,6 +80,22 @@ class RunSpec:
     params: dict = field(default_factory=dict, hash=False)
     mu_robot_box: float | None = None
     member: Member | None = None
+    box_size: float | None = None
+    box_mass: float | None = None
+    placement: str = "per gait"
+
+    def __post_init__(self):
+        if self.placement not in PLACEMENTS:
+            raise ValueError(f"placement = {self.placement!r} is not a placement rule (allowed: "
+                             f"{', '.join(PLACEMENTS)})")
+        # sidewinding's own rule is the travelling one: one spec (one cache entry) for both names
+        if self.gait == "sidewinding":
+            object.__setattr__(self, "placement", "per gait")
+
+    @property
+    def travels(self) -> bool:
+        """Whether the box is placed by the travelling rule (A31): sidewinding, or ``placement = "travel"``."""
+        return self.gait == "sidewinding" or self.placement == "travel"
 
     def reference(self):
         """The gait with ``params``, its ``phase`` shifted by the member's."""
@@ -86,6 +108,8 @@ class RunSpec:
         """The model parameters: ``mu_robot_box`` if given, every friction coefficient times the member's ``mu_scale``."""
         p = CobraParameters()
         p = p if self.mu_robot_box is None else replace(p, mu_robot_box=self.mu_robot_box)
+        p = p if self.box_size is None else replace(p, box_size=self.box_size)
+        p = p if self.box_mass is None else replace(p, box_mass=self.box_mass)
         if self.member is not None and self.member.mu_scale != 1.0:
             p = replace(p, mu=p.mu * self.member.mu_scale, mu_robot_box=p.mu_robot_box * self.member.mu_scale)
         return p
@@ -96,6 +120,9 @@ class RunSpec:
         spec = asdict(self)
         if self.member is None or self.member.nominal:
             del spec["member"]
+        for name, default in (("box_size", None), ("box_mass", None), ("placement", "per gait")):
+            if spec[name] == default:
+                del spec[name]
         record = {"spec": spec, "gait": gait_params(self.reference()),
                   "cobra": asdict(self.cobra_parameters()), "settings": asdict(StepSettings(dt=self.dt)),
                   "version": __version__}
@@ -109,8 +136,13 @@ class RunSpec:
         return h.hexdigest()
 
     def label(self) -> str:
-        """The run's name in progress lines and file names: the gait, and ``#i`` for member i."""
-        return self.gait if self.member is None else f"{self.gait}#{self.member.index}"
+        """The run's name in progress lines: the gait, ``#i`` for member i, and the box, friction and
+        placement where they are not the model's."""
+        name = self.gait if self.member is None else f"{self.gait}#{self.member.index}"
+        box = [f"{v:g} {unit}" for v, unit in ((self.box_size, "m"), (self.box_mass, "kg")) if v is not None]
+        box += [] if self.mu_robot_box is None else [f"mu_rb {self.mu_robot_box:g}"]
+        box += [] if self.placement == "per gait" else [f"{self.placement} placement"]
+        return name + (f" ({', '.join(box)})" if box else "")
 
     def filename(self) -> str:
         stem = self.gait if self.member is None else f"{self.gait}-m{self.member.index}"
@@ -158,7 +190,7 @@ def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Traject
     """
     model = cobra_model(spec.cobra_parameters(), with_box=True)
     ref = spec.reference()
-    if spec.gait == "sidewinding" and placement is None:
+    if spec.travels and placement is None:
         placement = nominal_placement(spec)
     direction = None if placement is None else placement.direction
     member = spec.member
@@ -288,7 +320,7 @@ def _run_on(executor, todo, cache_dir: str, progress: bool, queue, stored: list)
     the placement it recorded: its box-free placement run is then made once, not in every worker.
     """
     nominal = {s for s in todo if s.member is None}
-    held = [s for s in todo if s.gait == "sidewinding" and s.member is not None and replace(s, member=None) in nominal]
+    held = [s for s in todo if s.travels and s.member is not None and replace(s, member=None) in nominal]
     futures = {executor.submit(_run_in_worker, s, queue): s for s in todo if s not in held}
     watcher = _Progress(todo, progress, queue)
     pending = set(futures)
