@@ -25,13 +25,18 @@ Steps:
    ``ENSEMBLE_DURATION`` seconds (member 0 truncated to it), and write ``claims.json`` (a list
    of claim entries, each with its ``statistics`` over the members, ``check``), ``claims.md``
    and ``summary.json`` with every gait's numbers and every member's; then the MuJoCo
-   comparison on the first K = min(N, ``MUJOCO_MEMBERS`` = 4) members of each gait, cached.
+   comparison on the first K = min(N, ``MUJOCO_MEMBERS`` = 4) members of each gait, cached;
+4. with ``claims_map`` (a full run's default), the verdict map over the paper's unknowns
+   (``claims_map``): its runs go with step 1's (the nominal set-up is the first members of step
+   1), its cells are judged by the claims' rules, written to ``claims_map.json``,
+   ``claims_map.md`` and ``fig_claims_map.png`` (``map_figure``), named per claim at the end of
+   ``claims.md``, and joined to ``claims.json`` so that ``--check`` compares them too.
 
 Why ENSEMBLE_DURATION = 6 s: the claims judge steady gaits, so the window holds the default
 gaits' 2 s phase-rate ramp and two 0.5 Hz periods after it (the steady-power and phase claims
 need those two periods; sidewinding meets its box at about 1.5 s and pushes for the rest). A
-clean run then simulates 5 x 10 s figure runs and 35 x 6 s members, 260 simulated seconds. Why
-K = 4: ``mujoco_job``.
+clean run then simulates 5 x 10 s figure runs and 35 x 6 s members, 260 simulated seconds, and the
+map 124 more runs of 6 s, 744 simulated seconds. Why K = 4: ``mujoco_job``.
 
 A quick run (``quick``, ``cobra-ref figures --quick``) is a smoke run: 1 s runs at ``QUICK_DT`` =
 2 ms, ``QUICK_MEMBERS`` = 1 member per gait and no MuJoCo comparison unless asked for, the figures
