@@ -33,7 +33,7 @@ def distinct(gaits) -> list:
 def copies(gaits) -> dict:
     """{gait: why it is not counted} of the gaits of ``gaits`` that ``distinct`` leaves out."""
     gaits = list(gaits)
-    return {g: f"a mirrored copy of {MIRRORED[g]} (ensemble.MIRRORED): shown, not counted"
+    return {g: f"a copy of {MIRRORED[g]} (ensemble.MIRRORED), shown, not counted"
             for g in gaits if g not in distinct(gaits)}
 
 
