@@ -22,13 +22,14 @@ def test_the_fingerprint_changes_with_a_threshold_and_not_with_prose():
     sources = _sources()
     now = rules.fingerprint(sources)
     assert now == rules.fingerprint() and re.fullmatch(r"[0-9a-f]{64}", now)
-    assert "IMPULSE_SHARE = 0.01  #" in sources["claims.py"]
-    looser = dict(sources, **{"claims.py": sources["claims.py"].replace("IMPULSE_SHARE = 0.01  #", "IMPULSE_SHARE = 0.03  #")})
-    assert rules.fingerprint(looser) != now
-    share = dict(sources, **{"steering.py": sources["steering.py"].replace("GOAL_DISTANCE_SHARE = 0.2", "GOAL_DISTANCE_SHARE = 0.3")})
-    assert rules.fingerprint(share) != now
-    prose = dict(sources, **{"verdicts.py": sources["verdicts.py"].replace('"""The bookkeeping', '"""Reworded: the bookkeeping')
-                             .replace("# fraction of members", "# the share of members")})
+
+    def changed(name, old, new):
+        assert old in sources[name], (name, old)
+        return dict(sources, **{name: sources[name].replace(old, new)})
+    assert rules.fingerprint(changed("claims.py", "IMPULSE_SHARE = 0.01  #", "IMPULSE_SHARE = 0.03  #")) != now
+    assert rules.fingerprint(changed("steering.py", "GOAL_DISTANCE_SHARE = 0.2", "GOAL_DISTANCE_SHARE = 0.3")) != now
+    prose = changed("verdicts.py", '"""The bookkeeping', '"""Reworded: the bookkeeping')
+    prose["verdicts.py"] = prose["verdicts.py"].replace("# fraction of members", "# the share of members")
     assert prose["verdicts.py"] != sources["verdicts.py"] and rules.fingerprint(prose) == now
 
 

@@ -152,3 +152,31 @@ def test_direction_outcomes_of_the_committed_optima():
             record = json.load(f)
         assert o["goal"] == list(DIRECTIONS[o["name"]][1])
         assert math.dist(o["displacement"], o["goal"]) == pytest.approx(record["box_distance_to_goal"], abs=1e-9)
+
+
+def test_direction_outcomes_replay_an_optimum_without_a_recorded_path(tmp_path, monkeypatch):
+    """A direction optimum's JSON without ``box_path`` is judged on its replayed path (here a stand-in
+    for ``optima.replayed_box_path``, called with the JSON and the cache): goal (0.25, 0.15), box
+    from (1, 2) to (1.2, 2.1)."""
+    import json
+    import os
+    import shutil
+
+    import numpy as np
+
+    from cobra_ref.reproduce import optima
+
+    with open(os.path.join(optima.OPTIMIZED_DIR, "direction-left.json")) as f:
+        record = json.load(f)
+    del record["box_path"]
+    (tmp_path / "direction-left.json").write_text(json.dumps(record))
+    shutil.copy(os.path.join(optima.OPTIMIZED_DIR, "direction-ahead.json"), tmp_path)
+    calls = []
+
+    def replayed(path, cache_dir):
+        calls.append((os.path.basename(path), cache_dir))
+        return np.array([[1.0, 2.0], [1.1, 2.05], [1.2, 2.1]])
+    monkeypatch.setattr(optima, "replayed_box_path", replayed)
+    outcomes = {o["name"]: o for o in optima.direction_outcomes(str(tmp_path), "cache-dir")}
+    assert calls == [("direction-left.json", "cache-dir")] and set(outcomes) == {"ahead", "left"}
+    assert outcomes["left"]["displacement"] == pytest.approx([0.2, 0.1]) and outcomes["left"]["goal"] == [0.25, 0.15]

@@ -94,7 +94,8 @@ report's settings, and a changed fingerprint is named with its reason in CHANGEL
 Ensembles. ``ensemble[gait][i]`` is member i's summary; member i of every gait is scenario i.
 A claim comparing gaits (E, WB, EN, PP, SP, SL, MJ, MJ-C, MJ-sym) is evaluated per scenario i over
 the scenarios every gait it needs has; a claim about each run (NI, TL, PS, GT-own) per member of
-every distinct gait; GT per direction optimum. A member whose run has an error, or lacks the statistic (absent or nan), is left out;
+every distinct gait; GT per direction optimum. A member whose run has an error, or lacks the
+statistic (absent or nan), is left out;
 runs with an error are named. Of the n members (or scenarios) evaluated, the claim **holds**
 when it holds for >= 80 %, **does not hold** when for <= 20 %, and is **undecided** between;
 it is **not tested** when a gait or statistic it needs is missing or every member was left out.

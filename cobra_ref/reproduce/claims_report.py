@@ -1,7 +1,8 @@
 """``claims.md``: the claims report of ``cobra-ref figures`` in Markdown (``to_markdown``).
 
 The claims with their per-gait numbers, the members evaluated and holding, the verdicts and
-their sensitivity to the thresholds (``claims``), the checks of the model apart; then per gait the mean [min, max] over the members of the summary's numbers
+their sensitivity to the thresholds (``claims``), the checks of the model apart; then per gait
+the mean [min, max] over the members of the summary's numbers
 (``TABLE``) and the runs' health, the failed runs, and the settings.
 """
 
@@ -79,7 +80,8 @@ def _row(c: dict) -> str:
     else:
         shown = _fmt(vals)
     details = c.get("details") or {}
-    notes = [f"{k}: {_fmt(v)}" for k, v in details.items() if v not in ([], {}, None) and not k.startswith("sensitivity")]
+    notes = [f"{k}: {_fmt(v)}" for k, v in details.items()
+             if v not in ([], {}, None) and not k.startswith("sensitivity")]
     if e.get("left_out"):
         notes.append("left out: " + _fmt(e["left_out"]))
     if notes:

@@ -44,7 +44,8 @@ def sensitivity(thresholds: dict, results) -> dict:
     out = {}
     for label, value in thresholds.items():
         held = [bool(r) for r in results(value)]
-        out[label] = {"threshold": value, "holds": sum(held), "n": len(held), "verdict": verdict(len(held), sum(held))[1]}
+        out[label] = {"threshold": value, "holds": sum(held), "n": len(held),
+                      "verdict": verdict(len(held), sum(held))[1]}
     return out
 
 
