@@ -180,3 +180,16 @@ def test_direction_outcomes_replay_an_optimum_without_a_recorded_path(tmp_path, 
     outcomes = {o["name"]: o for o in optima.direction_outcomes(str(tmp_path), "cache-dir")}
     assert calls == [("direction-left.json", "cache-dir")] and set(outcomes) == {"ahead", "left"}
     assert outcomes["left"]["displacement"] == pytest.approx([0.2, 0.1]) and outcomes["left"]["goal"] == [0.25, 0.15]
+
+
+def test_the_report_carries_gt_statistics_and_the_kinds_for_check():
+    """``regenerate.ensemble_report`` with the direction optima's outcomes: GT's numbers become
+    statistics over the members (the same each member: the optima are not perturbed) that
+    ``--check`` compares, and every entry keeps its kind."""
+    from cobra_ref.reproduce.regenerate import ensemble_report
+
+    report = {c["id"]: c for c in ensemble_report(ensemble(n=3), GOALS_MISSED)}
+    stat = report["GT"]["statistics"]["ahead (J).mean"]
+    share = math.dist([0.2183, -0.0331], [0.3, 0.0]) / 0.3  # 29 %
+    assert stat["n"] == 3 and stat["min"] == stat["max"] == pytest.approx(share)
+    assert report["TL"]["kind"] == "check" and report["GT"]["kind"] == "claim"

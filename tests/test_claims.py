@@ -46,6 +46,10 @@ def test_every_report_says_it_is_a_smoke_run_on_its_first_line(quick_run):
     for name in ("claims.json", "summary.json"):
         with open(os.path.join(quick_run, name)) as f:
             assert next(iter(json.load(f))) == "smoke run", name
+    from cobra_ref.reproduce.rules import fingerprint
+
+    with open(os.path.join(quick_run, "summary.json")) as f:
+        assert json.load(f)["settings"]["claim rules (SHA-256 of their code, rules.fingerprint)"] == fingerprint()
 
 
 def test_check_refuses_a_quick_run_and_a_smoke_report(quick_run, capsys):
