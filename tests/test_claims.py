@@ -49,7 +49,8 @@ def test_every_report_says_it_is_a_smoke_run_on_its_first_line(quick_run):
     from cobra_ref.reproduce.rules import fingerprint
 
     with open(os.path.join(quick_run, "summary.json")) as f:
-        assert json.load(f)["settings"]["claim rules (SHA-256 of their code, rules.fingerprint)"] == fingerprint()
+        settings = json.load(f)["settings"]
+    assert settings["claim rules (SHA-256 of their code, rules.fingerprint)"] == fingerprint()
 
 
 def test_check_refuses_a_quick_run_and_a_smoke_report(quick_run, capsys):
