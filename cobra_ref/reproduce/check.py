@@ -4,7 +4,8 @@ Implements: the agreement rule of ``--check``, stated before any run. Two report
 claim entries of ``claims.json``) agree when
 
 * they hold the same claims (by ``id``);
-* every claim's verdict is equal (``verdict`` when the entry has one, else ``holds``);
+* every claim's verdict is equal (``verdict`` when the entry has one, else ``holds``), and so is
+  its ``kind`` ("claim" of the paper or "check" of the model; an entry without one is a claim);
 * every statistic of a claim agrees: each claim of the paper carries ``statistics`` =
   {name: {"mean", "min", "max"}} over the ensemble's members (``claim_statistics``), and the
   new mean must lie within the committed [min, max], widened by ``TOLERANCE`` = 1 % of the
@@ -99,6 +100,8 @@ def compare_claims(old: list[dict], new: list[dict]) -> list[str]:
         a, b = before[cid], after[cid]
         if verdict(a) != verdict(b):
             out.append(f"{cid}: verdict {verdict(a)!r} committed, {verdict(b)!r} now")
+        if a.get("kind", "claim") != b.get("kind", "claim"):
+            out.append(f"{cid}: kind {a.get('kind', 'claim')!r} committed, {b.get('kind', 'claim')!r} now")
         stats_a, stats_b = a.get("statistics") or {}, b.get("statistics") or {}
         for name in stats_a:
             if name not in stats_b:

@@ -121,10 +121,10 @@ def judge(specs: dict, runs: dict, window: float) -> dict:
             continue
         ensemble = {g: [gait_summaries({g: runs[s].truncated(window)})[g] for s in ms]
                     for g, ms in specs[setup.name].items()}
-        cells = {e["id"]: _cell(e) for e in ensemble_claims(ensemble) if e.get("kind", "claim") == "claim"}
+        entries = ensemble_claims(ensemble)
+        cells = {e["id"]: _cell(e) for e in entries if e.get("kind", "claim") == "claim"}
         rows.append({**setup.as_dict(), "claims": cells,
-                     "failed runs": sorted({k for e in ensemble_claims(ensemble)
-                                            for k in e["ensemble"]["left_out"]})})
+                     "failed runs": sorted({k for e in entries for k in e["ensemble"]["left_out"]})})
     n = {len(ms) for per in specs.values() for ms in per.values()}
     return {"setups": rows, "members": max(n, default=0), "window (s)": window,
             "gaits": list(MAP_GAITS), "gait parameters": "the committed optima of the nominal set-up "

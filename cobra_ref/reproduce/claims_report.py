@@ -1,7 +1,8 @@
 """``claims.md``: the claims report of ``cobra-ref figures`` in Markdown (``to_markdown``).
 
-The claims with their per-gait numbers, the members evaluated and holding, and the verdicts
-(``claims``); then per gait the mean [min, max] over the members of the summary's numbers
+The claims with their per-gait numbers, the members evaluated and holding, the verdicts and
+their sensitivity to the thresholds (``claims``), the checks of the model apart; then per gait
+the mean [min, max] over the members of the summary's numbers
 (``TABLE``) and the runs' health, the failed runs, and the settings.
 """
 
@@ -49,12 +50,53 @@ TABLE = (("duration", "T (s)", 1.0), ("locomotion_work", "W_loc (J)", 1.0), ("bo
          ("max_force_across_gap", "normal force across a positive gap (N)", 1.0))
 
 
+HEADER = ["| id | claim | per gait: mean [min, max] | n | members holding | verdict | sensitivity: threshold, "
+          "holding / n, verdict |", "|---|---|---|---|---|---|---|"]
+CHECKS = ("These hold by construction or test our own machinery, so they are not evidence for the paper: TL "
+          "checks the servo, which clamps the torque at tau_max (assumption A7); MJ-sym checks that J-mirror is "
+          "J reflected, which its members are by construction (assumption A29); GT-own checks that the optimizer "
+          "moved the box towards the goal it was given, set where the unoptimized gait already pushed; the "
+          "MuJoCo rows compare our model with MuJoCo's.")
+
+
+def _sensitivity(details: dict) -> str:
+    """The sensitivity entries of a claim's ``details`` compactly: "1 %: 16/32 undecided; ..."."""
+    parts = []
+    for key, table in details.items():
+        if key.startswith("sensitivity") and isinstance(table, dict):
+            what = key[len("sensitivity"):].strip("_ ")
+            parts += [f"{what + ' ' if what else ''}{label}: {row['holds']}/{row['n']} {row['verdict']}"
+                      for label, row in table.items()]
+    return "; ".join(parts)
+
+
+def _row(c: dict) -> str:
+    """One claim entry as a row of ``HEADER``."""
+    word = c.get("verdict") or {True: "holds", False: "does not hold", None: "not tested"}[c["holds"]]
+    e = c.get("ensemble") or {}
+    vals = c.get("values") or {}
+    if vals and all(isinstance(v, dict) and "mean" in v for v in vals.values()):
+        shown = "; ".join(f"{g}: {_mean_spread(v)}" for g, v in vals.items())
+    else:
+        shown = _fmt(vals)
+    details = c.get("details") or {}
+    notes = [f"{k}: {_fmt(v)}" for k, v in details.items()
+             if v not in ([], {}, None) and not k.startswith("sensitivity")]
+    if e.get("left_out"):
+        notes.append("left out: " + _fmt(e["left_out"]))
+    if notes:
+        shown += " (" + "; ".join(notes) + ")"
+    return (f"| {c['id']} | {_cell(c['claim'])} | {_cell(shown)} | {e.get('n', '')} | {e.get('holds', '')} | "
+            f"**{word}** | {_cell(_sensitivity(details))} |")
+
+
 def to_markdown(claims: list[dict], summaries: dict, settings: dict) -> str:
-    """``claims.md``: the claims with their per-gait numbers, the members evaluated and holding,
-    and the verdicts; then per gait the mean [min, max] over the members of the summary's
-    numbers and the runs' health (fixed-point convergence, torque limit, penetration), the
-    failed runs, and the settings: the human-readable claims report. ``summaries`` is
-    {gait: [summary, ...]} or {gait: summary}.
+    """``claims.md``: the claims of the paper with their per-gait numbers, the members evaluated
+    and holding, the verdicts and their thresholds' sensitivity; the checks of the model (entries
+    of ``kind`` "check") in a section of their own; then per gait the mean [min, max] over the
+    members of the summary's numbers and the runs' health (fixed-point convergence, torque
+    limit, penetration), the failed runs, and the settings: the human-readable claims report.
+    ``summaries`` is {gait: [summary, ...]} or {gait: summary}.
     """
     ens = {g: (list(v) if isinstance(v, (list, tuple)) else [v]) for g, v in summaries.items()}
     lines = ["# Claims of [COBRA] checked in cobra_ref", "",
@@ -62,24 +104,12 @@ def to_markdown(claims: list[dict], summaries: dict, settings: dict) -> str:
              "(definitions: `cobra_ref/reproduce/analysis.py`, assumption A18; the claims and their thresholds: "
              "`cobra_ref/reproduce/claims.py`). A claim is evaluated per ensemble member (per scenario when it "
              "compares gaits); it holds when it holds for >= 80 % of them, does not hold when for <= 20 %, and is "
-             "undecided between.", "",
-             "| id | claim | per gait: mean [min, max] | n | members holding | verdict |", "|---|---|---|---|---|---|"]
-    for c in claims:
-        word = c.get("verdict") or {True: "holds", False: "does not hold", None: "not tested"}[c["holds"]]
-        e = c.get("ensemble") or {}
-        vals = c.get("values") or {}
-        if vals and all(isinstance(v, dict) and "mean" in v for v in vals.values()):
-            shown = "; ".join(f"{g}: {_mean_spread(v)}" for g, v in vals.items())
-        else:
-            shown = _fmt(vals)
-        notes = [f"{k}: {_fmt(v)}" for k, v in (c.get("details") or {}).items() if v not in ([], {}, None)]
-        if e.get("left_out"):
-            notes.append("left out: " + _fmt(e["left_out"]))
-        if notes:
-            shown += " (" + "; ".join(notes) + ")"
-        n = e.get("n", "")
-        held = e.get("holds", "")
-        lines.append(f"| {c['id']} | {_cell(c['claim'])} | {_cell(shown)} | {n} | {held} | **{word}** |")
+             "undecided between. J-mirror, a mirrored copy of J, is shown but never counted in a verdict over "
+             "several gaits. The last column gives the verdict at other thresholds.", ""] + HEADER
+    lines += [_row(c) for c in claims if c.get("kind", "claim") != "check"]
+    checks = [_row(c) for c in claims if c.get("kind", "claim") == "check"]
+    if checks:
+        lines += ["", "## Checks of the model, not claims of the paper", "", CHECKS, ""] + HEADER + checks
     one = all(len(m) == 1 for m in ens.values())
     lines += ["", "## Per gait (the figure runs)" if one else "## Per gait (mean [min, max] over the members that completed)", "",
               "| gait | members (completed / all) | " + " | ".join(h for _, h, _ in TABLE) + " |",

@@ -6,7 +6,8 @@ exists in the optimized directory (``OPTIMIZED_DIR`` = ``cobra_ref/optimized/``,
 the defaults otherwise; ``--reoptimize`` writes them anew (``reoptimize``). ``fig_optimization``
 (one optimum per gait) and ``fig_directions`` (the direction goals, ``DIRECTIONS``) show each
 optimum's box path, the one its optimization recorded, or, for a JSON without one, a replay
-computed once and cached under a hash of the JSON and the physics source.
+computed once and cached under a hash of the JSON and the physics source; the direction optima's
+final box displacements against their goals (``direction_outcomes``) are what claim GT judges.
 """
 
 from __future__ import annotations
@@ -112,8 +113,7 @@ def optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, pr
         for label, gait, path in names:
             if os.path.isfile(path):
                 record = load_result(path)
-                xy = record["box_path"]["xy"] if record.get("box_path") else replayed_box_path(path, cache_dir)
-                out.append({"label": label, "gait": gait, "record": record, "box_xy": xy})
+                out.append({"label": label, "gait": gait, "record": record, "box_xy": _box_xy(record, path, cache_dir)})
         return out
 
     t0 = time.perf_counter()
@@ -130,6 +130,31 @@ def optimization_figures(directory: str, gaits, out_dir: str, cache_dir: str, pr
     say(progress, f"  optimization figures: {len(per_gait)} gaits, {len(directions)} directions, "
                   f"{time.perf_counter() - t0:.1f} s")
     return files
+
+
+def _box_xy(record: dict, path: str, cache_dir: str):
+    """The box path (n, 2) of the optimum ``record`` read from ``path``: the one its optimization
+    recorded, else its cached replay (``replayed_box_path``)."""
+    return record["box_path"]["xy"] if record.get("box_path") else replayed_box_path(path, cache_dir)
+
+
+def direction_outcomes(directory: str, cache_dir: str) -> list[dict]:
+    """[{"name", "gait", "goal", "displacement", "source"}] of the direction optima (``DIRECTIONS``)
+    in ``directory``: each goal (``settings.goal``) and the box's final displacement from its start
+    along the optimum's box path (``_box_xy``), relative to the box's start in world axes [m]; the
+    outcomes claim GT is judged on (``claims.ensemble_claims``)."""
+    from ..planning.results import load_result
+
+    out = []
+    for name, (gait, _) in DIRECTIONS.items():
+        path = os.path.join(directory, f"direction-{name}.json")
+        if not os.path.isfile(path):
+            continue
+        record = load_result(path)
+        xy = np.asarray(_box_xy(record, path, cache_dir), dtype=float)
+        out.append({"name": name, "gait": gait, "goal": [float(x) for x in record["settings"]["goal"][:2]],
+                    "displacement": [float(x) for x in xy[-1] - xy[0]], "source": shown(path)})
+    return out
 
 
 def replayed_box_path(path: str, cache_dir: str) -> np.ndarray:

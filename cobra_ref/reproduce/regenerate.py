@@ -22,7 +22,8 @@ Steps:
    ``fig_optimization`` and ``fig_directions`` come from the params JSONs (each optimum
    replayed once, its box path cached);
 3. judge the claims on the ensembles: every member over the same window, its first
-   ``ENSEMBLE_DURATION`` seconds (member 0 truncated to it), and write ``claims.json`` (a list
+   ``ENSEMBLE_DURATION`` seconds (member 0 truncated to it), claim GT on the direction optima's
+   box paths (``optima.direction_outcomes``), and write ``claims.json`` (a list
    of claim entries, each with its ``statistics`` over the members, ``check``), ``claims.md``
    and ``summary.json`` with every gait's numbers and every member's; then the MuJoCo
    comparison on the first K = min(N, ``MUJOCO_MEMBERS`` = 4) members of each gait, cached;
@@ -66,8 +67,9 @@ from ..infra.validation import DEFAULT_DT
 from .claims_map import MAP_MEMBERS, check_entries, judge, map_specs, where_lines
 from .map_figure import write_map
 from .mujoco_job import MUJOCO_MEMBERS, mujoco_rows, mujoco_submit
-from .optima import (DIRECTIONS, OPTIMIZED_DIR, optimization_figures, optimized_files, optimized_params,
-                     reoptimize, replays_submit, shown)
+from .optima import (DIRECTIONS, OPTIMIZED_DIR, direction_outcomes, optimization_figures, optimized_files,
+                     optimized_params, reoptimize, replays_submit, shown)
+from .rules import fingerprint
 from .runs import PAPER_GAITS, RunSpec, check_workers, run_all
 from .stamps import Stamps, clean, figure_stamp, say
 
@@ -294,16 +296,20 @@ def _finish(job: FiguresJob, side) -> dict:
                             job.progress) if opts.mujoco else None
     results = {g: job.runs[members[0]] for g, members in job.specs.items()}
     ensemble = ensemble_summaries(job.specs, job.runs, job.window, goal_directions(job.files_opt))
+    goals = None  # the direction optima's outcomes (claim GT)
     with smoke_run(SMOKE_TITLE if note else None):
         files = _paper_figures(job, results, ensemble)
         if job.optimized_dir and os.path.isdir(job.optimized_dir):
             files += optimization_figures(job.optimized_dir, opts.gaits, job.out_dir, job.cache_dir, job.progress,
                                           replays)
+            goals = direction_outcomes(job.optimized_dir, job.cache_dir)
         summaries = claims_mod.gait_summaries(results)
-        report = ensemble_report(ensemble)
+        report = ensemble_report(ensemble, goals)
         settings = _report_settings(job, results)
         if opts.mujoco:
-            report += mujoco_rows(pending, job.out_dir, job.progress, files)
+            # the MuJoCo comparisons check the model, they are not claims of the paper
+            report += [dict(row, kind=row.get("kind", "check")) for row in mujoco_rows(pending, job.out_dir,
+                                                                                       job.progress, files)]
         claims_map = judge(job.map_specs, job.runs, job.window) if job.map_specs else None
         if claims_map:
             files += write_map(claims_map, job.out_dir, note)
@@ -380,19 +386,22 @@ def _report_settings(job: FiguresJob, results: dict) -> dict:
             if job.params else "defaults (assumption A10)",
             "gait parameters": {g: r.meta.get("gait_params") for g, r in results.items()},
             "box direction (sidewinding)": results["sidewinding"].meta.get("box_direction")
-            if "sidewinding" in results else None}
+            if "sidewinding" in results else None,
+            "claim rules (SHA-256 of their code, rules.fingerprint)": fingerprint()}
 
 
-def ensemble_report(ensemble: dict) -> list[dict]:
+def ensemble_report(ensemble: dict, goals=None) -> list[dict]:
     """The paper's claims judged on the ensembles, each entry with its ``statistics`` over the
     members (``check.claim_statistics``): ``claims.ensemble_claims`` when the claims module has
-    it, otherwise ``claims.paper_claims`` of the member-0 summaries (over the same window)."""
+    it, otherwise ``claims.paper_claims`` of the member-0 summaries (over the same window);
+    ``goals``: the direction optima's outcomes (``optima.direction_outcomes``) for claim GT."""
     from . import claims as claims_mod
     from .check import claim_statistics
 
     judge = getattr(claims_mod, "ensemble_claims", None)
-    report = judge(ensemble) if judge else claims_mod.paper_claims({g: m[0] for g, m in ensemble.items()})
-    stats = claim_statistics(ensemble, claims_mod.paper_claims)
+    report = judge(ensemble, goals) if judge else claims_mod.paper_claims({g: m[0] for g, m in ensemble.items()},
+                                                                          goals)
+    stats = claim_statistics(ensemble, lambda summaries: claims_mod.paper_claims(summaries, goals))
     for entry in report:
         if entry["id"] in stats:
             entry["statistics"] = stats[entry["id"]]

@@ -4,6 +4,10 @@
 error, or lacks a statistic (absent or nan), is left out. Of the n members (or scenarios)
 evaluated, a claim **holds** when it holds for >= ``HOLDS_AT`` = 80 %, **does not hold** when
 for <= ``FAILS_AT`` = 20 %, and is **undecided** between; **not tested** when none was evaluated.
+A gait that is a mirrored copy of another present (``ensemble.MIRRORED``: J-mirror of J) is never
+counted in a verdict over several gaits (``distinct``); its numbers may be shown, marked as a copy.
+A threshold's sensitivity is the verdict by the same rule at each of a fixed list of thresholds
+(``sensitivity``).
 """
 
 from __future__ import annotations
@@ -13,9 +17,36 @@ from fractions import Fraction
 
 import numpy as np
 
+from .ensemble import MIRRORED
+
 HOLDS_AT = 0.8  # fraction of members for "holds"
 FAILS_AT = 0.2  # fraction of members at or below which it "does not hold"
 
+
+def distinct(gaits) -> list:
+    """The gaits of ``gaits`` (names, or an ensemble's keys) that are not a mirrored copy
+    (``ensemble.MIRRORED``) of another gait among them: the gaits a pooled verdict counts."""
+    gaits = list(gaits)
+    return [g for g in gaits if MIRRORED.get(g) not in gaits]
+
+
+def copies(gaits) -> dict:
+    """{gait: why it is not counted} of the gaits of ``gaits`` that ``distinct`` leaves out."""
+    gaits = list(gaits)
+    return {g: f"a copy of {MIRRORED[g]} (ensemble.MIRRORED), shown, not counted"
+            for g in gaits if g not in distinct(gaits)}
+
+
+def sensitivity(thresholds: dict, results) -> dict:
+    """{label: {"threshold", "holds", "n", "verdict"}}: the verdict (``verdict``) at each threshold
+    of ``thresholds`` {label as the rule writes it: value}, ``results(value)`` the per-member
+    booleans of the claim at that threshold."""
+    out = {}
+    for label, value in thresholds.items():
+        held = [bool(r) for r in results(value)]
+        out[label] = {"threshold": value, "holds": sum(held), "n": len(held),
+                      "verdict": verdict(len(held), sum(held))[1]}
+    return out
 
 
 def usable(s: dict, keys) -> bool:
@@ -83,15 +114,15 @@ def verdict(n: int, n_holds: int) -> tuple:
     return None, "undecided"
 
 
-def claim_entry(cid, text, values, results, failed, details=None, reason=""):
+def claim_entry(cid, text, values, results, failed, details=None, reason="", kind="claim"):
     """A claim dict (``claims`` module docstring) from per-member booleans ``results``: ``values``
     its numbers per gait, ``failed`` the runs left out, ``reason`` why it is not tested if no
-    member was evaluated."""
+    member was evaluated, ``kind`` "claim" (of the paper) or "check" (of the model)."""
     n, k = len(results), int(sum(bool(r) for r in results))
     holds, word = verdict(n, k)
     details = dict(details or {})
     if n == 0:
         details["not tested because"] = reason or "no member could be evaluated"
-    return {"id": cid, "claim": text, "values": values, "holds": holds, "verdict": word,
+    return {"id": cid, "kind": kind, "claim": text, "values": values, "holds": holds, "verdict": word,
             "ensemble": {"n": n, "holds": k, "fraction": (k / n) if n else None, "left_out": failed},
             "details": details}
