@@ -101,7 +101,7 @@ def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> li
         axes[r, 1].set_ylabel(r"$f_{N,i}$ [N]")
         axes[r, 2].set_ylabel(r"$\|f_{T,i}\|$ [N]")
     for c, values in plotted.items():
-        common.shared_force_ylim(list(axes[: len(values), c]), values)
+        common.common_ylim(list(axes[: len(values), c]), values, bottom=0.0)
     for ax, title in zip(axes[0], ("ground contact", "normal force", "tangential force")):
         ax.set_title(title, loc="left")
     for ax in axes[-1]:

@@ -88,7 +88,7 @@ def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> li
         for ax in axes[r]:
             ax.set_ylabel(f"{common.gait_label(gait, traj)}\nforce [N]", color=color)
     for c, values in enumerate(plotted):
-        common.shared_force_ylim(list(axes[: len(values), c]), values)
+        common.common_ylim(list(axes[: len(values), c]), values, bottom=0.0)
     axes[0, 0].set_title("robot-box contact, sum over links", loc="left")
     axes[0, 1].set_title("box-ground contact, sum over corners", loc="left")
     _legend(fig)
