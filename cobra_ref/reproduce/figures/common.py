@@ -124,7 +124,7 @@ def gait_color(gait: str) -> str:
 # J-mirror is J reflected (y -> -y): every scalar of it (work, power, distance, torque magnitudes)
 # equals J's, so its line lies exactly on J's; dashed and drawn on top, both stay visible
 GAIT_LINESTYLES = {"J-mirror": (0, (3.0, 2.0))}
-MIRROR_NOTE = "J-mirror (dashed) lies on J: its mirror image does the same"
+MIRROR_NOTE = "J-mirror (dashed) coincides with J by symmetry"
 
 
 def gait_line(gait: str) -> dict:

@@ -5,6 +5,8 @@ optimized runs (one params JSON of ``cobra-ref optimize`` each, with the box pat
 recorded):
 
 * left: the cost of every rollout in evaluation order (dots) and the best so far (line), per run;
+  each gait in its colour and line style (``common.gait_line``: J-mirror's costs are J's, so its
+  dashed line lies on J's, as the title says);
 * right: top view of the box's path over the horizon under the optimum (line), relative to its
   start (cross), to where it ended (dot), with the goal (star) and the initial guess's final box
   position (ring) for comparison; rollouts whose simulation failed are counted on the left.
@@ -30,18 +32,18 @@ def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
         common.empty_panel(ax_cost, "no optimization results")
         common.empty_panel(ax_path, "no optimization results")
     for i, run in enumerate(runs):
-        color = common.gait_color(run["gait"])
+        line = common.gait_line(run["gait"])
+        color = line["color"]
         history = run["record"]["history"]
         cost = np.array([h["cost"] for h in history], dtype=float)
         ax_cost.plot(np.arange(1, len(cost) + 1), cost, ".", color=color, ms=3)
-        ax_cost.plot(np.arange(1, len(cost) + 1), np.minimum.accumulate(cost), "-", color=color,
-                     label=run["label"])
+        ax_cost.plot(np.arange(1, len(cost) + 1), np.minimum.accumulate(cost), **line, label=run["label"])
         # everything relative to the box's start, so that the directions compare at a glance
         xy = np.asarray(run["box_xy"])
         start = xy[0].copy()
         xy = xy - start
         goal = np.asarray(run["record"]["settings"]["goal_world"]) - start
-        ax_path.plot(xy[:, 0], xy[:, 1], "-", color=color, label=run["label"])
+        ax_path.plot(xy[:, 0], xy[:, 1], **line, label=run["label"])
         ax_path.plot(xy[-1, 0], xy[-1, 1], "o", color=color, ms=4)
         ax_path.plot(goal[0], goal[1], "*", color=color, ms=9, mec="k", mew=0.5)
         first = history[0].get("box_final")
@@ -63,5 +65,6 @@ def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
     ax_path.set_title("box path of the optimum\n* goal, o end, ring: initial guess")
     if runs:
         ax_cost.legend(fontsize=6)
-    fig.suptitle(title)
+    note = common.mirror_note(run["gait"] for run in runs)
+    fig.suptitle(title + (f"\n{note} (its costs are J's, its path J's mirror image)" if note else ""))
     return common.save(fig, out_dir, stem)
