@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import importlib
 
-PAPER_FIGURES = ("fig03_snapshots", "fig04_robot_contacts", "fig05_box_contacts", "fig06_work_efficiency",
+PAPER_FIGURES = ("fig03_snapshots", "fig04_robot_contacts", "fig05_box_contacts", "fig_contact_points",
+                 "fig06_work_efficiency",
                  "fig07_power", "fig08_torques", "fig09_box_distance")
 FIGURES = PAPER_FIGURES + ("animate",)
 
