@@ -22,6 +22,8 @@ them out would hide where that weight goes.
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 from matplotlib.colors import to_rgba
 from matplotlib.lines import Line2D
@@ -99,7 +101,8 @@ def lifted_note(model, rows) -> str:
     """The title: per gait, the bodies that never touch the ground ("none" when all do)."""
     order = [n for n, _ in common.robot_bodies(model)]
     parts = [f"{gait}: {name_ranges(lifted_bodies(model, traj), order) or 'none'}" for gait, traj in rows]
-    return "Robot-ground contacts; bodies that never touch the ground in the run:\n" + "; ".join(parts)
+    # wrapped to the width of a two-column figure
+    return "Robot-ground contacts; bodies that never touch the ground in the run:\n" + textwrap.fill("; ".join(parts), 100)
 
 
 @common.paper_style

@@ -161,8 +161,8 @@ def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> li
     else:
         ax_members.set_axis_off()
     note = common.mirror_note(g for g, _ in rows)
-    fig.suptitle(f"Box distance of the {T:.3g} s runs: the paper's \"total distance\" as the box's {NET_NAME} "
-                 f"and its {PATH_NAME}" + (f"\n{note} (their box paths are mirror images)" if note else ""))
+    fig.suptitle(f"Box distance in {T:.3g} s: the paper's \"total distance\" as {NET_NAME} and as {PATH_NAME}"
+                 + (f"\n{note} (their box paths are mirror images)" if note else ""))
     return common.save(fig, out_dir, "fig09_box_distance")
 
 
