@@ -121,15 +121,17 @@ def gait_color(gait: str) -> str:
     return GAIT_COLORS.get(gait, "tab:gray")
 
 
-# J-mirror is J reflected (y -> -y): every scalar of it (work, power, distance, torque magnitudes)
+# a line style per gait besides its colour, so that lines that coincide stay apart (and the
+# figures read in grey). J-mirror is J reflected (y -> -y): every scalar of it (work, distance)
 # equals J's, so its line lies exactly on J's; dashed and drawn on top, both stay visible
-GAIT_LINESTYLES = {"J-mirror": (0, (3.0, 2.0))}
+GAIT_LINESTYLES = {"C": (0, (7.0, 2.0)), "S": (0, (4.0, 1.5, 1.0, 1.5)), "J": "-", "J-mirror": (0, (3.0, 2.0)),
+                   "sidewinding": (0, (4.0, 1.0, 1.0, 1.0, 1.0, 1.0))}
 MIRROR_NOTE = "J-mirror (dashed) coincides with J by symmetry"
 
 
 def gait_line(gait: str) -> dict:
-    """Keyword arguments of a gait's line: its colour (``gait_color``) and line style (solid, or
-    ``GAIT_LINESTYLES``), a dashed line drawn above the solid ones.
+    """Keyword arguments of a gait's line: its colour (``gait_color``) and line style
+    (``GAIT_LINESTYLES``; solid for a gait the paper does not have), the solid lines below the others.
 
     Every line that compares gaits, so that no gait hides another.
     """
