@@ -139,6 +139,14 @@ def gait_line(gait: str) -> dict:
     return {"color": gait_color(gait), "ls": ls, "zorder": 2.5 if ls != "-" else 2.0}
 
 
+GAIT_MARKERS = {"J-mirror": "x"}  # markers of scattered points where J-mirror's coincide with J's
+
+
+def gait_marker(gait: str) -> str:
+    """The marker of a gait's scattered points (``GAIT_MARKERS``; a dot otherwise)."""
+    return GAIT_MARKERS.get(gait, ".")
+
+
 def mirror_note(gaits) -> str:
     """``MIRROR_NOTE`` when both J and J-mirror are among ``gaits``, else "".
 

@@ -5,8 +5,9 @@ optimized runs (one params JSON of ``cobra-ref optimize`` each, with the box pat
 recorded):
 
 * left: the cost of every rollout in evaluation order (dots) and the best so far (line), per run;
-  each gait in its colour and line style (``common.gait_line``: J-mirror's costs are J's, so its
-  dashed line lies on J's, as the title says);
+  each gait in its colour, line style and marker (``common.gait_line``, ``gait_marker``: J-mirror's
+  costs are J's when it is J's mirror image, so its dashed line and crosses lie on J's, as the
+  title then says);
 * right: top view of the box's path over the horizon under the optimum (line), relative to its
   start (cross), to where it ended (dot), with the goal (star) and the initial guess's final box
   position (ring) for comparison; rollouts whose simulation failed are counted on the left.
@@ -20,6 +21,13 @@ from __future__ import annotations
 import numpy as np
 
 from . import common
+
+
+def mirrored_pair(runs: list[dict]) -> bool:
+    """Whether ``runs`` hold J and J-mirror with the same cost history (the mirror of one
+    optimization: their lines coincide)."""
+    costs = {run["gait"]: [h["cost"] for h in run["record"]["history"]] for run in runs}
+    return "J" in costs and costs["J"] == costs.get("J-mirror")
 
 
 def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
@@ -36,7 +44,8 @@ def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
         color = line["color"]
         history = run["record"]["history"]
         cost = np.array([h["cost"] for h in history], dtype=float)
-        ax_cost.plot(np.arange(1, len(cost) + 1), cost, ".", color=color, ms=3)
+        ax_cost.plot(np.arange(1, len(cost) + 1), cost, common.gait_marker(run["gait"]), color=color, ms=3,
+                     mew=0.6, ls="none")
         ax_cost.plot(np.arange(1, len(cost) + 1), np.minimum.accumulate(cost), **line, label=run["label"])
         # everything relative to the box's start, so that the directions compare at a glance
         xy = np.asarray(run["box_xy"])
@@ -65,6 +74,6 @@ def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
     ax_path.set_title("box path of the optimum\n* goal, o end, ring: initial guess")
     if runs:
         ax_cost.legend(fontsize=6)
-    note = common.mirror_note(run["gait"] for run in runs)
-    fig.suptitle(title + (f"\n{note} (its costs are J's, its path J's mirror image)" if note else ""))
+    note = common.MIRROR_NOTE if mirrored_pair(runs) else ""
+    fig.suptitle(title + (f"\n{note}" if note else ""))
     return common.save(fig, out_dir, stem)
