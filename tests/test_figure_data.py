@@ -294,3 +294,24 @@ def test_the_contact_points_are_the_logs(runs, cobra, drawn):
     keep = (c["contact_kind"] == 0) & (c["contact_step"] % fcp.STRIDE == 0)
     ax = fig.axes[PAPER_GAITS.index("S")]
     np.testing.assert_allclose(ax.collections[0].get_offsets(), c["contact_point"][keep, :2])
+
+
+def test_the_figure_command_marks_each_optimums_goal_on_fig03(runs, cobra, drawn, tmp_path, monkeypatch):
+    """``regenerate`` hands fig. 3 the goal of each params JSON (``settings.goal``, relative to the
+    box's start; ``goal_offsets``), which it marks; a JSON without a goal gives none."""
+    import json
+    from types import SimpleNamespace
+
+    from cobra_ref.reproduce import figures, regenerate
+
+    (tmp_path / "J.json").write_text(json.dumps({"settings": {"goal": [0.3, -0.4]}}))
+    (tmp_path / "C.json").write_text(json.dumps({"settings": {}}))
+    files = {g: str(tmp_path / f"{g}.json") for g in ("J", "C")}
+    assert regenerate.goal_offsets(files) == {"J": [0.3, -0.4]}
+    monkeypatch.setattr(figures, "FIGURES", ("fig03_snapshots",))
+    job = SimpleNamespace(every=[], window=0.1, out_dir=str(tmp_path), options=SimpleNamespace(force=True),
+                          progress=False, files_opt=files)
+    regenerate._paper_figures(job, {g: runs[g] for g in ("J", "C")}, {})
+    (star,) = drawn["fig03_snapshots"].findobj(lambda a: a.get_gid() == "goal:J")
+    np.testing.assert_allclose(star.get_xydata()[0], runs["J"].box_pose[0, :2] + [0.3, -0.4])
+    assert not drawn["fig03_snapshots"].findobj(lambda a: a.get_gid() == "goal:C")
