@@ -1,4 +1,4 @@
-"""Figure scripts of [COBRA] figs. 3-9 and the GIFs, one module per figure.
+"""Figure scripts of [COBRA] figs. 3-9, the contact points of figs. 4-5 and the GIFs, one module per figure.
 
 Every module in ``FIGURES`` has ``make(results: dict[str, Trajectory], out_dir: str, model,
 ensemble=None) -> list[str]`` (``ensemble``: {gait: [``analysis.summary`` per member]}, see

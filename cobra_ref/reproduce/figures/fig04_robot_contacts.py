@@ -13,7 +13,7 @@ over a link's contact spheres at each step). Each body has its own colour of a q
 palette (``BODY_COLORS``), the same in every panel, named in the legend below the panels; the
 force panels of a column share one y scale, which holds every peak, so the gaits compare at a
 glance. The title names, per gait, the bodies that never touch the ground in the run
-(``lifted_bodies``; e.g. C's L8-L10, lifted onto the box).
+(``lifted_bodies``; e.g. C's head and L8-L10 in its optimum's run).
 
 Note: the head and the tail are shown too (rows above L1 and below L10), although the paper's
 figure names only L1..L10: in our runs they carry a good part of the robot's weight, and leaving

@@ -37,23 +37,21 @@ def slope_label(gait: str, traj, slope: float) -> str:
     return f"{name}: slope {slope:.3g} J/J" if np.isfinite(slope) else f"{name}: no work on box"
 
 
-def plot_work(ax, rows) -> dict:
-    """The curves W_loc against W_box [J] of the nominal runs, their end points and fitted lines;
-    returns {gait: nominal slope}.
+def plot_work(ax, rows) -> None:
+    """The curves W_loc against W_box [J] of the nominal runs, their end points and fitted lines
+    (the slope in each curve's label).
     """
-    slopes = {}
     for gait, traj in rows:
         line = common.gait_line(gait)
         w_loc, w_box = locomotion_work(traj), box_work(traj)
-        slopes[gait], b = efficiency_fit(traj)
-        ax.plot(w_box, w_loc, **line, label=slope_label(gait, traj, slopes[gait]))
+        slope, b = efficiency_fit(traj)
+        ax.plot(w_box, w_loc, **line, label=slope_label(gait, traj, slope))
         ax.plot(w_box[-1:], w_loc[-1:], "o", color=line["color"], ms=3)
-        if np.isfinite(slopes[gait]):
+        if np.isfinite(slope):
             x = np.array([0.0, w_box.max(initial=0.0)])
-            ax.plot(x, slopes[gait] * x + b, color=line["color"], ls=":", lw=0.7)
+            ax.plot(x, slope * x + b, color=line["color"], ls=":", lw=0.7)
     ax.set_xlabel(r"work done on the box $W_{box}$ [J]")
     ax.set_ylabel(r"locomotion work $W_{loc}$ [J]")
-    return slopes
 
 
 def plot_slopes(ax, rows, ensemble: dict) -> None:
