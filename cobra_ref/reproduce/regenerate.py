@@ -53,6 +53,7 @@ previous outputs or none, never half a file.
 from __future__ import annotations
 
 import importlib
+import inspect
 import json
 import os
 import time
@@ -75,7 +76,7 @@ from .stamps import Stamps, clean, figure_stamp, say
 
 __all__ = ["DIRECTIONS", "ENSEMBLE_DURATION", "FULL_DURATION", "FiguresOptions", "MEMBERS", "MUJOCO_MEMBERS",
            "OPTIMIZED_DIR", "QUICK_DT", "QUICK_DURATION", "QUICK_MEMBERS", "SMOKE_KEY", "SMOKE_TITLE",
-           "check_output_dir", "ensemble_report", "ensemble_specs", "ensemble_summaries", "goal_directions",
+           "check_output_dir", "ensemble_report", "ensemble_specs", "ensemble_summaries", "goal_directions", "goal_offsets",
            "marked_json", "optimized_files", "optimized_params", "regenerate", "reoptimize", "smoke_note", "specs_for",
            "window"]
 
@@ -162,10 +163,10 @@ def ensemble_summaries(specs: dict, results: dict, duration: float, goals: dict 
     return out
 
 
-def goal_directions(files: dict) -> dict:
-    """{gait: unit (x, y)} of the goal of each params JSON in ``files`` ({gait: path}) that has one:
-    ``goal_direction`` of the ensemble summaries (the goal is relative to the box's start, world
-    axes: ``settings.goal`` of the params JSON)."""
+def goal_offsets(files: dict) -> dict:
+    """{gait: (dx, dy)} [m] of the goal of each params JSON in ``files`` ({gait: path}) that has a
+    finite, non-zero one: ``settings.goal`` of the params JSON, relative to the box's start, world
+    axes (fig. 3 marks it)."""
     out = {}
     for g, path in files.items():
         try:
@@ -174,8 +175,14 @@ def goal_directions(files: dict) -> dict:
         except (OSError, ValueError, KeyError, TypeError):
             continue
         if goal.shape == (2,) and np.all(np.isfinite(goal)) and np.linalg.norm(goal) > 0:
-            out[g] = [float(x) for x in goal / np.linalg.norm(goal)]
+            out[g] = [float(x) for x in goal]
     return out
+
+
+def goal_directions(files: dict) -> dict:
+    """{gait: unit (x, y)} of the goal of each params JSON in ``files`` ({gait: path}) that has one
+    (``goal_offsets``): ``goal_direction`` of the ensemble summaries."""
+    return {g: [float(x) for x in np.asarray(v) / np.linalg.norm(v)] for g, v in goal_offsets(files).items()}
 
 
 @dataclass(frozen=True)
@@ -356,6 +363,8 @@ def _paper_figures(job: FiguresJob, results: dict, ensemble: dict) -> list[str]:
     model = cobra_model(with_box=True)
     keys = {spec.label(): spec.key() for spec in job.every}
     keys["ensemble window (s)"] = job.window
+    # fig. 3 marks each optimum's goal (a module whose ``make`` takes ``goals``)
+    keys["goals"] = goals = goal_offsets(job.files_opt)
     stamps = Stamps(job.out_dir, job.options.force)
     files = []
     for name in FIGURES:
@@ -367,7 +376,8 @@ def _paper_figures(job: FiguresJob, results: dict, ensemble: dict) -> list[str]:
             say(job.progress, f"  {name}: unchanged, kept")
             continue
         t0 = time.perf_counter()
-        written = module.make(results, job.out_dir, model, ensemble=ensemble)
+        extra = {"goals": goals} if "goals" in inspect.signature(module.make).parameters else {}
+        written = module.make(results, job.out_dir, model, ensemble=ensemble, **extra)
         stamps.record(name, stamp, written)
         files += written
         say(job.progress, f"  {name}: {len(written)} file(s), {time.perf_counter() - t0:.1f} s")

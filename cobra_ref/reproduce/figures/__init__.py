@@ -1,4 +1,4 @@
-"""Figure scripts of [COBRA] figs. 3-9 and the GIFs, one module per figure.
+"""Figure scripts of [COBRA] figs. 3-9, the contact points of figs. 4-5 and the GIFs, one module per figure.
 
 Every module in ``FIGURES`` has ``make(results: dict[str, Trajectory], out_dir: str, model,
 ensemble=None) -> list[str]`` (``ensemble``: {gait: [``analysis.summary`` per member]}, see
@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import importlib
 
-PAPER_FIGURES = ("fig03_snapshots", "fig04_robot_contacts", "fig05_box_contacts", "fig06_work_efficiency",
+PAPER_FIGURES = ("fig03_snapshots", "fig04_robot_contacts", "fig05_box_contacts", "fig_contact_points",
+                 "fig06_work_efficiency",
                  "fig07_power", "fig08_torques", "fig09_box_distance")
 FIGURES = PAPER_FIGURES + ("animate",)
 

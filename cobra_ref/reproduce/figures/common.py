@@ -7,8 +7,9 @@ one figure. ``results`` = {gait: Trajectory} (the nominal runs); ``ensemble`` = 
 per member]}, each ``analysis.summary`` of one member's trajectory, member 0 (the nominal run)
 first: figs. 6 and 9 draw its spread (``draw_spread``), the others draw the nominal runs only.
 
-Figures that compare gaits put them on one y scale (``robust_ylim``), and notes about clipped
-values go above the axes, outside the data (``note_above``, ``clip_note``).
+Figures that compare gaits put them on one y scale that holds every peak (``common_ylim``), and
+notes go above the axes, outside the data (``note_above``). Each gait has its own colour and line
+style (``gait_line``): J-mirror's line lies exactly on J's, so it is dashed and drawn on top.
 
 Sizes follow the paper: one column is ``ONE_COLUMN`` = 3.5 in wide, two columns ``TWO_COLUMN`` =
 7 in; fonts are 7-8 pt so the figures stay readable at that size (``STYLE``).
@@ -120,6 +121,40 @@ def gait_color(gait: str) -> str:
     return GAIT_COLORS.get(gait, "tab:gray")
 
 
+# a line style per gait besides its colour, so that lines that coincide stay apart (and the
+# figures read in grey). J-mirror is J reflected (y -> -y): every scalar of it (work, distance)
+# equals J's, so its line lies exactly on J's; dashed and drawn on top, both stay visible
+GAIT_LINESTYLES = {"C": (0, (7.0, 2.0)), "S": (0, (4.0, 1.5, 1.0, 1.5)), "J": "-", "J-mirror": (0, (3.0, 2.0)),
+                   "sidewinding": (0, (4.0, 1.0, 1.0, 1.0, 1.0, 1.0))}
+MIRROR_NOTE = "J-mirror (dashed) coincides with J by symmetry"
+
+
+def gait_line(gait: str) -> dict:
+    """Keyword arguments of a gait's line: its colour (``gait_color``) and line style
+    (``GAIT_LINESTYLES``; solid for a gait the paper does not have), the solid lines below the others.
+
+    Every line that compares gaits, so that no gait hides another.
+    """
+    ls = GAIT_LINESTYLES.get(gait, "-")
+    return {"color": gait_color(gait), "ls": ls, "zorder": 2.5 if ls != "-" else 2.0}
+
+
+GAIT_MARKERS = {"J-mirror": "x"}  # markers of scattered points where J-mirror's coincide with J's
+
+
+def gait_marker(gait: str) -> str:
+    """The marker of a gait's scattered points (``GAIT_MARKERS``; a dot otherwise)."""
+    return GAIT_MARKERS.get(gait, ".")
+
+
+def mirror_note(gaits) -> str:
+    """``MIRROR_NOTE`` when both J and J-mirror are among ``gaits``, else "".
+
+    The caption's word on the two lines that coincide.
+    """
+    return MIRROR_NOTE if {"J", "J-mirror"} <= set(gaits) else ""
+
+
 def gait_label(gait: str, traj) -> str:
     """The gait's name, marked "(partial)" when its simulation stopped early.
     """
@@ -173,71 +208,32 @@ def window_mean(t: np.ndarray, y: np.ndarray, window: float = FORCE_WINDOW) -> t
     return centres, sums / (counts if y.ndim == 1 else counts[:, None])
 
 
-CLIP_MARGIN = 1.2  # a y axis capped at a percentile of |values| ends this factor above it
+def common_ylim(axes, values, bottom: float | None = None) -> None:
+    """Give ``axes`` one y range that contains every plotted value (``values``: one array per
+    axes), 5 % beyond the largest |value|; ``bottom``: a fixed lower end (0 for magnitudes).
 
-
-def clip_levels(values, quantile: float) -> tuple[float, float] | None:
-    """(peak, cap) of |values|: the largest, and ``CLIP_MARGIN`` x the ``quantile`` of them; None
-    when there is no finite non-zero value.
-    """
-    v = np.abs(np.asarray(values, dtype=float)).ravel()
-    v = v[np.isfinite(v) & (v > 0)]
-    if len(v) == 0:
-        return None
-    return float(v.max()), CLIP_MARGIN * float(np.quantile(v, quantile))
-
-
-def robust_ylim(axes, values, quantile: float = 0.99, bottom: float | None = None) -> list[float | None]:
-    """Give ``axes`` one common y range, capped where a few spikes (e.g. the landing impact in the
-    first steps) would otherwise flatten everything else; return, per axes, the peak of |values|
-    that lies beyond the range (None where nothing is clipped).
-
-    Readable force / power / torque panels that compare gaits on one scale. Each panel's own need is
-    its peak of |values|, or ``CLIP_MARGIN`` x its ``quantile`` when the peak is more than 1.5 times
-    that (a spike); the common limit is the largest need of any panel (+5 %), so every panel's bulk
-    shows and a gait with larger values looks larger. ``axes``: a list of axes, ``values``: a list
-    of one array per axes, ``bottom``: a fixed lower end (0 for magnitudes). Call it after
-    everything is plotted. The caller says what was clipped outside the data area (``clip_note``).
+    Force / power / torque panels that compare gaits on one scale: a gait with larger values looks
+    larger, and every peak a claim is about is inside the axes. Call it after everything is
+    plotted.
     """
     if not axes:
-        return []
-    levels = [clip_levels(v, quantile) for v in values]
-    needs = [peak if peak <= 1.5 * cap else cap for peak, cap in filter(None, levels)]
-    limit = 1.05 * max(needs) if needs else np.inf
-    # the union of the autoscaled ranges (already one range when the axes share y), then capped
+        return
+    peaks = [float(np.abs(v).max()) for v in values if np.size(v) and np.isfinite(v).any()]
+    limit = 1.05 * max(peaks) if peaks and max(peaks) > 0 else np.inf
+    # the union of the autoscaled ranges (already one range when the axes share y), then bounded
     lo = min(ax.get_ylim()[0] for ax in axes) if bottom is None else bottom
     hi = max(ax.get_ylim()[1] for ax in axes)
     for ax in axes:
         ax.set_ylim(max(lo, -limit), min(hi, limit))
-    return [lv[0] if lv and lv[0] > limit else None for lv in levels]
 
 
 def note_above(ax, text: str) -> None:
     """Write ``text`` small and grey above the axes' top right corner (the right-hand title slot),
     outside the data area; the layout makes room for it.
 
-    Clip notes and peak annotations. Column titles then go on the left (``loc="left"``).
+    Peak annotations and captions of a panel. Column titles then go on the left (``loc="left"``).
     """
     ax.set_title(text, loc="right", fontsize=5.5, color="0.35", pad=2)
-
-
-def clip_note(ax, peak: float | None, unit: str = "N") -> None:
-    """``note_above`` "peak <peak> <unit> (clipped)" when ``robust_ylim`` clipped this axes.
-
-    The clip notes of figs. 4 and 5.
-    """
-    if peak is not None:
-        note_above(ax, f"peak {peak:.3g} {unit} (clipped)")
-
-
-def shared_force_ylim(axes, values, unit: str = "N") -> None:
-    """``robust_ylim`` from 0 on the ``axes`` (one column of force panels, one array of plotted
-    values each) and a ``clip_note`` above each clipped one.
-
-    The common y scale of the force columns of figs. 4 and 5.
-    """
-    for ax, peak in zip(axes, robust_ylim(axes, values, bottom=0.0)):
-        clip_note(ax, peak, unit)
 
 
 ENSEMBLE_RANGE = (0.1, 0.9)  # the quantiles of an ensemble's members drawn as its range bar

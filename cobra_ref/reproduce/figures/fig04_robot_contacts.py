@@ -11,7 +11,9 @@ normal force f_N,i and the tangential force f_T,i. Here each gait is one row of 
 both from ``analysis.contact_forces(traj, ROBOT_GROUND, model.nb)`` (forces ON the link, summed
 over a link's contact spheres at each step). Each body has its own colour of a qualitative
 palette (``BODY_COLORS``), the same in every panel, named in the legend below the panels; the
-force panels of a column share one y scale, so the gaits compare at a glance.
+force panels of a column share one y scale, which holds every peak, so the gaits compare at a
+glance. The title names, per gait, the bodies that never touch the ground in the run
+(``lifted_bodies``; e.g. C's head and L8-L10 in its optimum's run).
 
 Note: the head and the tail are shown too (rows above L1 and below L10), although the paper's
 figure names only L1..L10: in our runs they carry a good part of the robot's weight, and leaving
@@ -19,6 +21,8 @@ them out would hide where that weight goes.
 """
 
 from __future__ import annotations
+
+import textwrap
 
 import numpy as np
 from matplotlib.colors import to_rgba
@@ -74,6 +78,33 @@ def plot_per_link(ax, t: np.ndarray, force: np.ndarray, colors: list) -> np.ndar
     return f_mean[f_mean > 0]
 
 
+def lifted_bodies(model, traj) -> list[str]:
+    """Names of the robot's bodies that never touch the ground in ``traj``, head to tail."""
+    touched = contact_forces(traj, ROBOT_GROUND, model.nb).in_contact.any(axis=0)
+    return [name for name, i in common.robot_bodies(model) if not touched[i]]
+
+
+def name_ranges(names: list[str], order: list[str]) -> str:
+    """``names`` with runs of three or more neighbours in ``order`` shortened, e.g. "head, L8-L10"."""
+    pos = sorted(order.index(n) for n in names)
+    runs = []
+    for p in pos:
+        if runs and p == runs[-1][-1] + 1:
+            runs[-1].append(p)
+        else:
+            runs.append([p])
+    return ", ".join(f"{order[r[0]]}-{order[r[-1]]}" if len(r) >= 3 else ", ".join(order[p] for p in r)
+                     for r in runs)
+
+
+def lifted_note(model, rows) -> str:
+    """The title: per gait, the bodies that never touch the ground ("none" when all do)."""
+    order = [n for n, _ in common.robot_bodies(model)]
+    parts = [f"{gait}: {name_ranges(lifted_bodies(model, traj), order) or 'none'}" for gait, traj in rows]
+    # wrapped to the width of a two-column figure
+    return "Robot-ground contacts; bodies that never touch the ground in the run:\n" + textwrap.fill("; ".join(parts), 100)
+
+
 @common.paper_style
 def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
     """Write ``fig04_robot_contacts.png/.pdf``: per gait, the ground-contact timeline of head,
@@ -101,12 +132,14 @@ def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> li
         axes[r, 1].set_ylabel(r"$f_{N,i}$ [N]")
         axes[r, 2].set_ylabel(r"$\|f_{T,i}\|$ [N]")
     for c, values in plotted.items():
-        common.shared_force_ylim(list(axes[: len(values), c]), values)
+        common.common_ylim(list(axes[: len(values), c]), values, bottom=0.0)
     for ax, title in zip(axes[0], ("ground contact", "normal force", "tangential force")):
         ax.set_title(title, loc="left")
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
     _body_legend(fig, names, colors)
+    if rows:
+        fig.suptitle(lifted_note(model, rows))
     return common.save(fig, out_dir, "fig04_robot_contacts")
 
 

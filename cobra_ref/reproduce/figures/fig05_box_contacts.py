@@ -11,7 +11,10 @@ f_T. Here each gait is one row of two panels, both from ``analysis.contact_force
 
 f_N = f . n and |f_T| = |f - f_N n| for the contact force f of the log; the magnitudes are the
 same on either body of a contact pair (action = reaction). The panels of a column share one y
-scale, so the gaits compare at a glance.
+scale, which holds every peak, so the gaits compare at a glance. The title gives, per gait, how
+hard the box presses the ground while a link pushes it (``wedging``: the mean box-ground f_N
+over the robot-box steps, in units of the box's weight): a rolling link pushes on the box above
+its centre and wedges it down (assumption A22), so the box-ground force is several times m g.
 """
 
 from __future__ import annotations
@@ -53,6 +56,25 @@ def plot_box_ground(ax, model, traj, t: np.ndarray, color: str) -> np.ndarray:
     return plotted
 
 
+def wedging(model, traj) -> float:
+    """Mean box-ground normal force over the steps with a robot-box contact, divided by the box's
+    weight m g (nan when no link touched the box)."""
+    box = common.box_body(model)
+    pushed = contact_forces(traj, ROBOT_BOX, model.nb).in_contact.any(axis=1)
+    if box is None or not pushed.any():
+        return float("nan")
+    f_N = contact_forces(traj, BOX_GROUND, model.nb).normal[:, box]
+    return float(f_N[pushed].mean() / (-model.mass[box] * model.gravity[2]))
+
+
+def wedging_note(model, rows) -> str:
+    """The title's lines on the wedging force, per gait ``wedging``, e.g. ".. C 3.2, S 2.4 .."."""
+    ratios = [(gait, wedging(model, traj)) for gait, traj in rows]
+    shown = [f"{g} {r:.1f}" for g, r in ratios if np.isfinite(r)]
+    return ("box-ground $f_N$ while a link pushes the box, mean, in units of the box's weight $mg$:\n"
+            + ", ".join(shown) + " (the pushing link wedges the box down, A22)") if shown else ""
+
+
 def touching_links(model, in_contact: np.ndarray) -> str:
     """Names of the bodies that touched the box at least once, e.g. "L5, L6".
 
@@ -88,22 +110,22 @@ def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> li
         for ax in axes[r]:
             ax.set_ylabel(f"{common.gait_label(gait, traj)}\nforce [N]", color=color)
     for c, values in enumerate(plotted):
-        common.shared_force_ylim(list(axes[: len(values), c]), values)
+        common.common_ylim(list(axes[: len(values), c]), values, bottom=0.0)
     axes[0, 0].set_title("robot-box contact, sum over links", loc="left")
     axes[0, 1].set_title("box-ground contact, sum over corners", loc="left")
-    _legend(fig)
+    _legend(fig, wedging_note(model, rows) if common.box_body(model) is not None else "")
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
     return common.save(fig, out_dir, "fig05_box_contacts")
 
 
-def _legend(fig) -> None:
-    """One legend for the line styles, above the panels."""
+def _legend(fig, note: str) -> None:
+    """One legend for the line styles, above the panels, under the ``note`` on the wedging force."""
     handles = [Line2D([], [], color="0.2", label=r"normal $f_N$"),
                Line2D([], [], color="0.2", ls="--", lw=0.8, label=r"tangential $\|f_T\|$"),
                Line2D([], [], color="0.3", ls=":", lw=0.8, label="box weight $mg$")]
     fig.legend(handles=handles, loc="outside upper center", ncol=3,
-               title=f"forces: means over {1e3 * common.FORCE_WINDOW:g} ms windows")
+               title=(note + "\n" if note else "") + f"forces: means over {1e3 * common.FORCE_WINDOW:g} ms windows")
 
 
 if __name__ == "__main__":

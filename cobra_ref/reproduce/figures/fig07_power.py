@@ -7,9 +7,9 @@ panel per gait on a shared time axis, from ``analysis.locomotion_power``:
 * P_loc = sum_j tau_j qdot_j [W] (solid; negative when the joints brake the motion),
 * |P|_loc = sum_j |tau_j qdot_j| [W] (dashed; the power the actuators must supply),
 
-with qdot_j the joint rate at each step's midpoint. Every panel has the same y scale (the paper
-compares the gaits: "the large peaks in instantaneous power from sidewinding"); a spike beyond
-it is clipped and its value written above the panel, with the mean, the 99th percentile
+with qdot_j the joint rate at each step's midpoint. Every panel has the same y scale, and it
+holds every gait's peaks (the paper compares the gaits: "the large peaks in instantaneous power
+from sidewinding", claim PP); above each panel, the mean, the 99th percentile
 (``analysis.percentile_99``) and the peak of |P|_loc.
 """
 
@@ -21,15 +21,14 @@ from ..analysis import locomotion_power, percentile_99
 from . import common
 
 
-def power_note(P_abs: np.ndarray, clipped: bool) -> str:
-    """The numbers above a panel, e.g. "|P|: mean 3.1, p99 9.2, peak 9.5 W (clipped)".
+def power_note(P_abs: np.ndarray) -> str:
+    """The numbers above a panel, e.g. "|P|: mean 3.1, p99 9.2, peak 9.5 W".
 
     Fig. 7's annotation (mean, 99th percentile and peak of |P|_loc [W]).
     """
     if not len(P_abs):
         return ""
-    text = f"|P|: mean {P_abs.mean():.3g}, p99 {percentile_99(P_abs):.3g}, peak {P_abs.max():.3g} W"
-    return text + (" (clipped)" if clipped else "")
+    return f"|P|: mean {P_abs.mean():.3g}, p99 {percentile_99(P_abs):.3g}, peak {P_abs.max():.3g} W"
 
 
 def plot_power(ax, traj, color: str) -> np.ndarray:
@@ -51,7 +50,7 @@ def plot_power(ax, traj, color: str) -> np.ndarray:
 @common.paper_style
 def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
     """Write ``fig07_power.png/.pdf``: P_loc (solid) and |P|_loc (dashed) [W] per gait over time,
-    on one y scale.
+    on one y scale that holds every peak.
 
     Implements: [COBRA] fig. 7 with ``analysis.locomotion_power``. ``ensemble`` is accepted for a
     common signature and not drawn: the nominal runs only.
@@ -66,9 +65,10 @@ def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> li
         color = common.gait_color(gait)
         P_abs.append(plot_power(ax, traj, color))
         ax.set_ylabel(f"{common.gait_label(gait, traj)}\npower [W]", color=color)
-    clipped = common.robust_ylim(list(axes[: len(rows)]), P_abs, quantile=0.995)
-    for ax, values, peak in zip(axes, P_abs, clipped):
-        common.note_above(ax, power_note(values, peak is not None))
+    # |P|_loc >= |P_loc| at every step: a scale that holds |P|_loc holds both lines
+    common.common_ylim(list(axes[: len(rows)]), P_abs)
+    for ax, values in zip(axes, P_abs):
+        common.note_above(ax, power_note(values))
     fig.suptitle("Instantaneous locomotion power")
     if rows:
         fig.legend(handles=axes[0].get_lines()[:2], loc="outside lower center", ncol=2)

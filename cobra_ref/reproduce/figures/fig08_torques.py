@@ -1,22 +1,28 @@
-"""Fig. 8: torques of the central pitch joint J5 and the central yaw joint J6.
+"""Fig. 8: every joint's torque, the central pitch joint J5 and yaw joint J6 in bold, with the phase lags.
 
 The paper's fig. 8 "depicts the torque profile for the central yawing (J6) and pitching (J5)
-joints for each gait". Plotted: the logged joint torques tau_J5(t) and tau_J6(t) [N m]
-(``traj.tau``, held over each step; no ``analysis`` formula), one row per gait, with the actuator
-limit +-tau_max (``model.tau_limit`` of that joint, the XH540-W270 stall torque 9.2 N m) drawn as
-dotted lines and the region beyond it shaded red. Every panel has the same y scale, so the gaits
-and the two joints compare at a glance; above each panel, the 99th percentile of |tau|
-(``analysis.percentile_99``) and its peak, marked "(clipped)" when the peak is beyond the scale.
+joints for each gait. Other joints show similar profiles offset by a phase angle based on the
+executed gait". Plotted: the logged joint torques tau_j(t) [N m] (``traj.tau``, held over each
+step), one row per gait, the pitch joints (J1, J3, .., J9) in the left panel and the yaw joints
+(J0, J2, .., J10) in the right one; each joint has its own colour (``joint_colors``, head to
+tail), the central joints J5 and J6 are drawn bold and black. Each joint's legend entry gives its phase
+lag against J0 in gait periods (``analysis.joint_phase_correlation``, over the steady part of
+the run; "n/a" where the period is unknown). The actuator limit +-tau_max (``model.tau_limit``,
+the XH540-W270 stall torque 9.2 N m) is dotted and the region beyond it shaded red. Every panel
+has the same y scale, which holds every peak; above each panel, the 99th percentile of the
+panel's largest |tau_j| per step (``analysis.percentile_99``) and its peak.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from matplotlib import colormaps
 
-from ..analysis import percentile_99
+from ..analysis import joint_phase_correlation, percentile_99
 from . import common
 
-JOINTS = ("J5", "J6")
+CENTRAL = {"Ry": "J5", "Rz": "J6"}  # the paper's central pitch and yaw joints, drawn bold
+AXIS_NAMES = {"Ry": "pitch", "Rz": "yaw"}
 LIMIT_VIEW = 1.3  # the y scale shows at least +-1.3 tau_max
 
 
@@ -29,25 +35,55 @@ def tau_column(model, joint: str) -> int:
     return revolute.index(model.joint_names.index(joint))
 
 
-def torque_note(tau: np.ndarray, clipped: bool) -> str:
-    """The numbers above a panel, e.g. "|tau|: p99 8.1, peak 37.2 N m (clipped)".
+def joints_by_axis(model) -> dict:
+    """{"Ry": [pitch joint names], "Rz": [yaw joint names]}, each head to tail."""
+    out = {axis: [] for axis in CENTRAL}
+    for name, jt in zip(model.joint_names, model.joint_type):
+        if jt in out:
+            out[jt].append(name)
+    return out
 
-    Fig. 8's annotation (99th percentile and peak of |tau| [N m]).
+
+def joint_colors(model) -> dict:
+    """{joint name: colour}: the revolute joints along ``viridis`` from the head (dark) to the tail."""
+    names = [n for n, jt in zip(model.joint_names, model.joint_type) if jt != "free"]
+    return {n: colormaps["viridis"](x) for n, x in zip(names, np.linspace(0.0, 0.9, len(names)))}
+
+
+def lag_label(joint: str, lag: float) -> str:
+    """Legend entry of a joint: its name and its phase lag against J0, e.g. "J3 +0.16 T"."""
+    if joint == "J0":
+        return "J0 (reference)"
+    return f"{joint} {lag:+.2f} T" if np.isfinite(lag) else f"{joint} lag n/a"
+
+
+def torque_note(tau: np.ndarray) -> str:
+    """The numbers above a panel, e.g. "p99 8.1, peak 9.2 N m".
+
+    Fig. 8's annotation: of the largest |tau| of the panel's joints at each step [N m].
     """
-    if not len(tau):
+    if not tau.size:
         return ""
-    text = rf"$|\tau|$: p99 {percentile_99(np.abs(tau)):.3g}, peak {np.abs(tau).max():.3g} N m"
-    return text + (" (clipped)" if clipped else "")
+    per_step = np.abs(tau).reshape(len(tau), -1).max(axis=1)
+    return f"p99 {percentile_99(per_step):.3g}, peak {per_step.max():.3g} N m"
 
 
-def plot_torque(ax, t: np.ndarray, tau: np.ndarray, color: str) -> None:
-    """tau(t) [N m], min-max decimated.
-    """
+def plot_joints(ax, model, traj, joints: list, lags: list) -> np.ndarray:
+    """tau_j(t) [N m] of ``joints``, min-max decimated, each in its colour, the central one bold,
+    labelled with its phase lag; returns the (N, len(joints)) torques plotted."""
+    t = common.step_times(traj)
     if len(t) == 0:
         common.empty_panel(ax, "no steps")
-        return
-    t_plot, y = common.minmax_decimate(t, tau)
-    ax.plot(t_plot, y, color=color)
+        return np.zeros((0, len(joints)))
+    colors = joint_colors(model)
+    tau = traj.tau[:, [tau_column(model, j) for j in joints]]
+    for k, joint in enumerate(joints):
+        bold = joint in CENTRAL.values()
+        t_plot, y = common.minmax_decimate(t, tau[:, k])
+        ax.plot(t_plot, y, color="k" if bold else colors[joint], lw=1.1 if bold else 0.6, zorder=3 if bold else 2,
+                label=lag_label(joint, lags[model.joint_names.index(joint) - 1]))
+    ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=5, handlelength=1.2, borderaxespad=0.3)
+    return tau
 
 
 def draw_limits(axes, limit: float) -> None:
@@ -69,36 +105,37 @@ def draw_limits(axes, limit: float) -> None:
 
 @common.paper_style
 def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
-    """Write ``fig08_torques.png/.pdf``: tau of J5 and J6 [N m] per gait with the +-tau_max limit,
+    """Write ``fig08_torques.png/.pdf``: per gait, tau [N m] of every pitch joint (left) and every
+    yaw joint (right), J5 and J6 bold, each labelled with its phase lag, with the +-tau_max limit,
     on one y scale.
 
-    Implements: [COBRA] fig. 8 (central pitch J5 and yaw J6 torques) with the limit of [COBRA]
-    eq. (7) constraint (3), |tau| <= tau_max. ``ensemble`` is accepted for a common signature
-    and not drawn: the nominal runs only.
+    Implements: [COBRA] fig. 8 (central pitch J5 and yaw J6 torques, the other joints offset by a
+    phase) with ``analysis.joint_phase_correlation`` and the limit of [COBRA] eq. (7) constraint
+    (3), |tau| <= tau_max. ``ensemble`` is accepted for a common signature and not drawn.
     """
-    rows = common.ordered(results)
-    fig = common.new_figure(common.TWO_COLUMN, 1.0 * max(len(rows), 1) + 0.6)
-    axes = fig.subplots(max(len(rows), 1), len(JOINTS), sharex=True, sharey=True, squeeze=False)
+    rows, groups = common.ordered(results), joints_by_axis(model)
+    fig = common.new_figure(common.TWO_COLUMN, 1.1 * max(len(rows), 1) + 0.6)
+    axes = fig.subplots(max(len(rows), 1), len(groups), sharex=True, sharey=True, squeeze=False)
     if not rows:
         common.empty_panel(axes[0, 0], "no gait to show")
-    panels, taus = [], []
+    taus = []
     for r, (gait, traj) in enumerate(rows):
-        color, t = common.gait_color(gait), common.step_times(traj)
-        for c, joint in enumerate(JOINTS):
-            taus.append(traj.tau[:, tau_column(model, joint)])
-            panels.append(axes[r, c])
-            plot_torque(axes[r, c], t, taus[-1], color)
-            axes[r, c].set_ylabel(f"{common.gait_label(gait, traj)}\n" + r"$\tau$ [N m]", color=color)
-    for ax, tau, peak in zip(panels, taus, common.robust_ylim(panels, taus, quantile=0.995)):
-        common.note_above(ax, torque_note(tau, peak is not None))
-    for c, joint in enumerate(JOINTS):
-        draw_limits(list(axes[: len(rows), c]), model.tau_limit[model.joint_names.index(joint)])
-    axes[0, 0].set_title("J5 (central pitch joint)", loc="left")
-    axes[0, 1].set_title("J6 (central yaw joint)", loc="left")
+        lags = joint_phase_correlation(traj)[1]
+        for c, joints in enumerate(groups.values()):
+            taus.append(plot_joints(axes[r, c], model, traj, joints, lags))
+            axes[r, c].set_ylabel(f"{common.gait_label(gait, traj)}\n" + r"$\tau$ [N m]", color=common.gait_color(gait))
+    panels = list(axes[: len(rows)].ravel())
+    common.common_ylim(panels, taus)
+    for ax, tau in zip(panels, taus):
+        common.note_above(ax, torque_note(tau))
+    limit = max((model.tau_limit[model.joint_names.index(j)] for j in CENTRAL.values()), default=np.inf)
+    draw_limits(panels, limit)
+    for c, axis in enumerate(groups):
+        axes[0, c].set_title(f"{AXIS_NAMES[axis]} joints ({CENTRAL[axis]} black)", loc="left")
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
-    limit = model.tau_limit[model.joint_names.index(JOINTS[0])]
-    fig.suptitle(f"Joint torques; dotted: stall-torque limit $\\pm${limit:g} N m")
+    fig.suptitle(f"Joint torques of every joint; legend: phase lag behind J0 in gait periods T\n"
+                 f"above each panel: p99 and peak of max$_j|\\tau_j|$; dotted: stall-torque limit $\\pm${limit:g} N m")
     return common.save(fig, out_dir, "fig08_torques")
 
 

@@ -5,6 +5,9 @@ optimized runs (one params JSON of ``cobra-ref optimize`` each, with the box pat
 recorded):
 
 * left: the cost of every rollout in evaluation order (dots) and the best so far (line), per run;
+  each gait in its colour, line style and marker (``common.gait_line``, ``gait_marker``: J-mirror's
+  costs are J's when it is J's mirror image, so its dashed line and crosses lie on J's, as the
+  title then says);
 * right: top view of the box's path over the horizon under the optimum (line), relative to its
   start (cross), to where it ended (dot), with the goal (star) and the initial guess's final box
   position (ring) for comparison; rollouts whose simulation failed are counted on the left.
@@ -20,6 +23,13 @@ import numpy as np
 from . import common
 
 
+def mirrored_pair(runs: list[dict]) -> bool:
+    """Whether ``runs`` hold J and J-mirror with the same cost history (the mirror of one
+    optimization: their lines coincide)."""
+    costs = {run["gait"]: [h["cost"] for h in run["record"]["history"]] for run in runs}
+    return "J" in costs and costs["J"] == costs.get("J-mirror")
+
+
 def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
     """Write ``stem.png`` / ``.pdf``; ``runs``: dicts with ``label``, ``gait``, ``record`` (the
     params JSON as read by ``shooting.load_result``) and ``box_xy`` ((n, 2) box path of the optimum's rollout).
@@ -30,18 +40,19 @@ def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
         common.empty_panel(ax_cost, "no optimization results")
         common.empty_panel(ax_path, "no optimization results")
     for i, run in enumerate(runs):
-        color = common.gait_color(run["gait"])
+        line = common.gait_line(run["gait"])
+        color = line["color"]
         history = run["record"]["history"]
         cost = np.array([h["cost"] for h in history], dtype=float)
-        ax_cost.plot(np.arange(1, len(cost) + 1), cost, ".", color=color, ms=3)
-        ax_cost.plot(np.arange(1, len(cost) + 1), np.minimum.accumulate(cost), "-", color=color,
-                     label=run["label"])
+        ax_cost.plot(np.arange(1, len(cost) + 1), cost, common.gait_marker(run["gait"]), color=color, ms=3,
+                     mew=0.6, ls="none")
+        ax_cost.plot(np.arange(1, len(cost) + 1), np.minimum.accumulate(cost), **line, label=run["label"])
         # everything relative to the box's start, so that the directions compare at a glance
         xy = np.asarray(run["box_xy"])
         start = xy[0].copy()
         xy = xy - start
         goal = np.asarray(run["record"]["settings"]["goal_world"]) - start
-        ax_path.plot(xy[:, 0], xy[:, 1], "-", color=color, label=run["label"])
+        ax_path.plot(xy[:, 0], xy[:, 1], **line, label=run["label"])
         ax_path.plot(xy[-1, 0], xy[-1, 1], "o", color=color, ms=4)
         ax_path.plot(goal[0], goal[1], "*", color=color, ms=9, mec="k", mew=0.5)
         first = history[0].get("box_final")
@@ -63,5 +74,6 @@ def make(runs: list[dict], out_dir: str, stem: str, title: str) -> list[str]:
     ax_path.set_title("box path of the optimum\n* goal, o end, ring: initial guess")
     if runs:
         ax_cost.legend(fontsize=6)
-    fig.suptitle(title)
+    note = common.MIRROR_NOTE if mirrored_pair(runs) else ""
+    fig.suptitle(title + (f"\n{note}" if note else ""))
     return common.save(fig, out_dir, stem)
