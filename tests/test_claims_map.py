@@ -158,3 +158,16 @@ def test_the_map_files_are_written_and_a_smoke_run_says_so_first(tmp_path):
         body = json.load(f)
     assert next(iter(body)) == "smoke run" and body["setups"][1]["claims"]["WB"]["held"] == 4
     assert (tmp_path / "claims_map.md").read_text().startswith("**SMOKE RUN: a test**")
+
+
+def test_claims_md_names_where_each_claim_holds_right_after_its_table():
+    from cobra_ref.reproduce.claims_map import where_lines
+    from cobra_ref.reproduce.claims_report import to_markdown
+
+    m = _map({"nominal": {"WB": (0, 4)}, "box 0.30 m": {"WB": (4, 4)}})
+    entry = {"id": "WB", "claim": "most work", "values": {}, "holds": False, "verdict": "does not hold",
+             "ensemble": {"n": 4, "holds": 0}, "details": {}}
+    check = dict(entry, id="TL", kind="check")
+    text = to_markdown([entry, check], {"C": {}}, {}, where_lines(m))
+    assert "- **WB**: does not hold: nominal; holds: box 0.30 m" in text
+    assert text.index("- **WB**") < text.index("## Checks of the model")

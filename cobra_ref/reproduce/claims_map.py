@@ -226,7 +226,7 @@ def where_lines(claims_map: dict) -> list[str]:
     """Markdown lines: per claim the set-ups where it holds, fails and is undecided, and the set-ups
     (if any) where every claim holds (the section of ``claims.md`` and ``claims_map.md``)."""
     every = all_hold(claims_map)
-    lines = ["## Where each claim holds", ""]
+    lines = ["## Where each claim holds over the paper's unknowns (the verdict map)", ""]
     for cid, by in where_claims_hold(claims_map).items():
         parts = [f"{v}: {', '.join(names)}" for v, names in by.items()]
         lines.append(f"- **{cid}**: " + "; ".join(parts))

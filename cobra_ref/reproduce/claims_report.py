@@ -90,13 +90,14 @@ def _row(c: dict) -> str:
             f"**{word}** | {_cell(_sensitivity(details))} |")
 
 
-def to_markdown(claims: list[dict], summaries: dict, settings: dict) -> str:
+def to_markdown(claims: list[dict], summaries: dict, settings: dict, where: list[str] | None = None) -> str:
     """``claims.md``: the claims of the paper with their per-gait numbers, the members evaluated
     and holding, the verdicts and their thresholds' sensitivity; the checks of the model (entries
     of ``kind`` "check") in a section of their own; then per gait the mean [min, max] over the
     members of the summary's numbers and the runs' health (fixed-point convergence, torque
     limit, penetration), the failed runs, and the settings: the human-readable claims report.
-    ``summaries`` is {gait: [summary, ...]} or {gait: summary}.
+    ``summaries`` is {gait: [summary, ...]} or {gait: summary}; ``where``: Markdown lines put after
+    the claims' table (where in the verdict map each claim holds, ``claims_map.where_lines``).
     """
     ens = {g: (list(v) if isinstance(v, (list, tuple)) else [v]) for g, v in summaries.items()}
     lines = ["# Claims of [COBRA] checked in cobra_ref", "",
@@ -107,6 +108,7 @@ def to_markdown(claims: list[dict], summaries: dict, settings: dict) -> str:
              "undecided between. J-mirror, a mirrored copy of J, is shown but never counted in a verdict over "
              "several gaits. The last column gives the verdict at other thresholds.", ""] + HEADER
     lines += [_row(c) for c in claims if c.get("kind", "claim") != "check"]
+    lines += [""] + where if where else []
     checks = [_row(c) for c in claims if c.get("kind", "claim") == "check"]
     if checks:
         lines += ["", "## Checks of the model, not claims of the paper", "", CHECKS, ""] + HEADER + checks
@@ -126,7 +128,8 @@ def to_markdown(claims: list[dict], summaries: dict, settings: dict) -> str:
     if failed:
         lines += ["", "Failed runs (left out of every claim):", ""] + [f"- {f}" for f in failed]
     lines += ["", "## Settings", ""] + [f"- {k}: {_fmt(v)}" for k, v in settings.items()]
-    lines += ["", "Model choices that change these outcomes: the robot-box "
+    lines += ["", "Model choices that change these outcomes (the verdict map, claims_map.md, judges the claims at "
+              "other values of the first three): the box's size 0.10 m (assumption A8), the robot-box "
               "friction mu_rb = 0.5 (assumption A22; at mu_rb = 1 the rolling push self-locks), the box "
               "placement per gait (assumption A9, cobra_ref/start.py), and the joints, position servos whose "
               "torque is clamped at tau_max (assumption A7: 'steps over tau_max' counts the steps where the "

@@ -323,11 +323,10 @@ def _finish(job: FiguresJob, side) -> dict:
     # the map's cells join the report that --check compares; claims.md names where each claim holds
     checked = report + (check_entries(claims_map) if claims_map else [])
     claims_json = marked_json({"claims": clean(checked)}, note) if note else json.dumps(clean(checked), indent=1)
-    where = ("\n" + "\n".join(where_lines(claims_map)) + "\n(the map: claims_map.md, fig_claims_map.png)\n"
-             if claims_map else "")
+    where = where_lines(claims_map) + ["", "(the map: claims_map.md, fig_claims_map.png)"] if claims_map else None
     paths = {"claims.json": claims_json,
-             "claims.md": (f"**{note}**\n\n" if note else "") + claims_mod.to_markdown(report, summaries, settings)
-             + where,
+             "claims.md": (f"**{note}**\n\n" if note else "") + claims_mod.to_markdown(report, summaries, settings,
+                                                                                        where),
              "summary.json": marked_json(clean({"gaits": summaries, "ensemble": ensemble, "settings": settings}), note)}
     for fname, text in paths.items():
         write_text(os.path.join(job.out_dir, fname), text)
