@@ -130,8 +130,9 @@ def add_parsers(sub) -> None:
                                    "parameters of cobra_ref/optimized/ where present) on all cores, or read "
                                    "them from the cache, and write fig03_snapshots.png ... fig09_box_distance.png "
                                    "(+ PDF), anim_<gait>.gif, claims.json, claims.md and summary.json to --out, "
-                                   "with the MuJoCo comparison. --quick is a smoke run of the same pipeline in "
-                                   "about a minute: 1 s runs, 1 member per gait, no MuJoCo comparison, PNG only, "
+                                   "with the MuJoCo comparison and the verdict map over the paper's unknowns "
+                                   "(claims_map.md, fig_claims_map.png). --quick is a smoke run of the same pipeline in "
+                                   "about a minute: 1 s runs, 1 member per gait, no MuJoCo comparison and no map, PNG only, "
                                    "every output marked as a smoke run on its first line. "
                                    "Prints a one-line JSON summary.")
     p.add_argument("--out", default=None, help=f"output directory (default {FULL_OUT}, {QUICK_OUT} with --quick)")
