@@ -86,11 +86,13 @@ def draw_map(claims_map: dict, out_dir: str, note: str | None = None) -> list[st
             return c["fraction"], f"{c['verdict']} ({c['held']}/{c['n']})"
         return value
 
-    figures = [("fig_claims_map.png", [(cid, verdict_of(cid)) for cid in cids])]
+    figures = [("fig_claims_map.png", "Where each claim holds over the paper's unknowns",
+                [(cid, verdict_of(cid)) for cid in cids])]
     with_t = [(cid, t) for cid in cids for t in _thresholds(setups, cid)]
     if with_t:
-        figures.append(("fig_claims_thresholds.png", [(f"{cid} at {t}", _at(cid, t)) for cid, t in with_t]))
-    for name, panels in figures:
+        figures.append(("fig_claims_thresholds.png", "Each claim's verdict at each of its thresholds, per set-up",
+                        [(f"{cid} at {t}", _at(cid, t)) for cid, t in with_t]))
+    for name, what, panels in figures:
         ncol = min(4, len(panels))
         nrow = -(-len(panels) // ncol)
         fig, axes = plt.subplots(nrow, ncol, figsize=(3.2 * ncol, 2.2 * nrow), squeeze=False)
@@ -98,8 +100,8 @@ def draw_map(claims_map: dict, out_dir: str, note: str | None = None) -> list[st
             _panel(ax, rows, value, title)
         for ax in list(axes.flat)[len(panels):]:
             ax.axis("off")
-        fig.suptitle((f"{note}\n" if note else "") + "Where each claim holds over the paper's unknowns "
-                     f"({claims_map['members']} members per gait, colour: share holding)", fontsize=8)
+        fig.suptitle((f"{note}\n" if note else "") + f"{what} ({claims_map['members']} members per gait, "
+                     "colour: share holding)", fontsize=8)
         fig.tight_layout()
         path = os.path.join(out_dir, name)
         atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=130, format="png"))
