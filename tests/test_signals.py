@@ -113,11 +113,18 @@ class Reader(threading.Thread):
             time.sleep(0.05)
 
 
+def _sigint_as_at_a_terminal():
+    """In the child before it runs: SIGINT's default disposition, as a command started at a terminal
+    has it (a test run started in the background inherits SIGINT ignored, which the command keeps)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start(argv, tmp_path):
     """``python -m cobra_ref ARGV`` in a session of its own, in ``tmp_path``; (process, stderr reader)."""
     env = dict(os.environ, PYTHONPATH=REPO + os.pathsep + os.environ.get("PYTHONPATH", ""), MPLBACKEND="Agg")
     process = subprocess.Popen([sys.executable, "-m", "cobra_ref", *argv], cwd=tmp_path, env=env,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True,
+                               preexec_fn=_sigint_as_at_a_terminal)
     reader = Reader(process.stderr)
     reader.start()
     return process, reader
@@ -178,6 +185,16 @@ def test_the_workers_die_with_the_command_even_when_it_is_killed(tmp_path):
 
 # ------------------------------------------------------------------ the handler, in this process
 
+@pytest.fixture
+def sigint_as_at_a_terminal():
+    """Python's own Ctrl-C handler while the test runs, as at a terminal (a test run started in the
+    background inherits SIGINT ignored, which ``stop_signals`` leaves as it is); the inherited one after."""
+    inherited = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, inherited)
+
+
+@pytest.mark.usefixtures("sigint_as_at_a_terminal")
 @pytest.mark.parametrize("signum, raised, status, name", [
     (signal.SIGTERM, Terminated, 143, "SIGTERM"),
     (signal.SIGINT, KeyboardInterrupt, 130, "Ctrl-C"),
