@@ -42,7 +42,7 @@ def test_the_nominal_set_up_is_the_figures_own_runs_and_every_other_changes_its_
     assert set(mapped["nominal"]) == set(MAP_GAITS), "J-mirror (J reflected) is not mapped"
     for g in MAP_GAITS:
         assert mapped["nominal"][g] == figure[g][:4]
-    big = mapped["box 0.30 m, mu_rb 1.0"]["J"]
+    big = mapped["box 0.30 m with mu_rb 1.0"]["J"]
     assert [s.member.index if s.member else 0 for s in big] == [m.index for m in members("J", 4)]
     p = big[2].cobra_parameters()
     assert p.box_size == 0.30 and p.mu_robot_box == pytest.approx(1.0 * big[2].member.mu_scale)
@@ -139,7 +139,7 @@ def test_the_figure_puts_the_nominal_set_up_in_each_row_ordered_by_value(tmp_pat
     assert [r["box_size"] for r in rows["box size"]] == [0.10, 0.20, 0.30]
     assert [r["box_mass"] for r in rows["box mass"]] == [0.25, 0.5, 2.0]
     assert [r["placement"] for r in rows["placement"]] == ["per gait", "travel"]
-    assert [r["name"] for r in rows["corner"]] == ["box 0.30 m, mu_rb 1.0"]
+    assert [r["name"] for r in rows["corner"]] == ["box 0.30 m with mu_rb 1.0"]
     paths = draw_map(m, str(tmp_path))
     assert [os.path.basename(p) for p in paths] == ["fig_claims_map.png"]
     with open(paths[0], "rb") as f:

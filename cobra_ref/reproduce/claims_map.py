@@ -79,7 +79,7 @@ SETUPS = (
     SetUp("mu_rb 0.3", mu_robot_box=0.3, unknown="robot-box mu"),
     SetUp("mu_rb 1.0", mu_robot_box=1.0, unknown="robot-box mu"),
     SetUp("travel placement", placement="travel", unknown="placement"),
-    SetUp("box 0.30 m, mu_rb 1.0", box_size=0.30, mu_robot_box=1.0, unknown="corner"),
+    SetUp("box 0.30 m with mu_rb 1.0", box_size=0.30, mu_robot_box=1.0, unknown="corner"),
 )
 
 
