@@ -36,13 +36,13 @@ committed ones like every other verdict.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..params import CobraParameters
 from .ensemble import members
 
 __all__ = ["MAP_GAITS", "MAP_MEMBERS", "SETUPS", "SetUp", "all_hold", "check_entries", "judge", "map_specs",
-           "mapped", "markdown", "where_claims_hold", "where_lines"]
+           "mapped", "markdown", "thresholds", "where_claims_hold", "where_lines"]
 
 MAP_MEMBERS = 4  # members per gait and set-up (member 0 nominal)
 MAP_GAITS = ("C", "S", "J", "sidewinding")
@@ -88,8 +88,6 @@ def map_specs(figure_specs: dict, setups=SETUPS, n_members: int = MAP_MEMBERS, d
     own specs (``figure_specs`` {gait: [RunSpec]}, their first ``n_members``), every other set-up's
     are the same runs with the set-up's box, friction and placement, each ``duration`` seconds
     (default: the figures' members' duration)."""
-    from dataclasses import replace
-
     gaits = [g for g in MAP_GAITS if g in figure_specs]
     out = {}
     for setup in setups:
@@ -167,6 +165,12 @@ def mapped(claims_map: dict) -> list[str]:
     return list(dict.fromkeys(cid for cid, c in cells if c["verdict"] != "not tested"))
 
 
+def thresholds(claims_map: dict, cid: str) -> list[str]:
+    """The thresholds (as the claim's rule writes them) at which claim ``cid`` was judged in the map."""
+    return list(dict.fromkeys(t for r in claims_map["setups"]
+                              for t in (r["claims"].get(cid, {}).get("sensitivity") or {})))
+
+
 def where_claims_hold(claims_map: dict) -> dict:
     """{claim id: {verdict: [set-up names]}}: where in the map each claim holds, fails, is undecided."""
     out: dict = {}
@@ -209,10 +213,10 @@ def markdown(claims_map: dict) -> str:
                      f"{r['placement']} | " + " | ".join(_mark(r["claims"][c]) if c in r["claims"] else ""
                                                          for c in cids) + " |")
     lines += [""] + where_lines(claims_map)
-    with_thresholds = [cid for cid in cids if any(r["claims"].get(cid, {}).get("sensitivity") for r in rows)]
+    with_thresholds = [cid for cid in cids if thresholds(claims_map, cid)]
     lines += ["", "## Each threshold's verdict, per set-up", ""] if with_thresholds else []
     for cid in with_thresholds:
-        ts = list(dict.fromkeys(t for r in rows for t in (r["claims"].get(cid, {}).get("sensitivity") or {})))
+        ts = thresholds(claims_map, cid)
         lines += [f"### {cid}", "", "| set-up | " + " | ".join(ts) + " |", "|---|" + "---|" * len(ts)]
         for r in rows:
             sens = r["claims"].get(cid, {}).get("sensitivity") or {}

@@ -16,7 +16,7 @@ import os
 
 import numpy as np
 
-from .claims_map import mapped, markdown
+from .claims_map import mapped, markdown, thresholds
 from .stamps import clean
 
 __all__ = ["draw_map", "grid", "write_map"]
@@ -73,8 +73,7 @@ def draw_map(claims_map: dict, out_dir: str, note: str | None = None) -> list[st
 
     from ..infra.output import atomic_write
 
-    setups = claims_map["setups"]
-    rows = grid(setups)
+    rows = grid(claims_map["setups"])
     cids = mapped(claims_map)
     paths = []
 
@@ -88,7 +87,7 @@ def draw_map(claims_map: dict, out_dir: str, note: str | None = None) -> list[st
 
     figures = [("fig_claims_map.png", "Where each claim holds over the paper's unknowns",
                 [(cid, verdict_of(cid)) for cid in cids])]
-    with_t = [(cid, t) for cid in cids for t in _thresholds(setups, cid)]
+    with_t = [(cid, t) for cid in cids for t in thresholds(claims_map, cid)]
     if with_t:
         figures.append(("fig_claims_thresholds.png", "Each claim's verdict at each of its thresholds, per set-up",
                         [(f"{cid} at {t}", _at(cid, t)) for cid, t in with_t]))
@@ -108,10 +107,6 @@ def draw_map(claims_map: dict, out_dir: str, note: str | None = None) -> list[st
         plt.close(fig)
         paths.append(path)
     return paths
-
-
-def _thresholds(setups: list[dict], cid: str) -> list[str]:
-    return list(dict.fromkeys(t for r in setups for t in (r["claims"].get(cid, {}).get("sensitivity") or {})))
 
 
 def _at(cid: str, t: str):

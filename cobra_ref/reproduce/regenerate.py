@@ -53,7 +53,6 @@ previous outputs or none, never half a file.
 from __future__ import annotations
 
 import importlib
-import inspect
 import json
 import os
 import time
@@ -362,7 +361,7 @@ def _paper_figures(job: FiguresJob, results: dict, ensemble: dict) -> list[str]:
     model = cobra_model(with_box=True)
     keys = {spec.label(): spec.key() for spec in job.every}
     keys["ensemble window (s)"] = job.window
-    # fig. 3 marks each optimum's goal (a module whose ``make`` takes ``goals``)
+    # fig. 3 marks each optimum's goal
     keys["goals"] = goals = goal_offsets(job.files_opt)
     stamps = Stamps(job.out_dir, job.options.force)
     files = []
@@ -375,8 +374,7 @@ def _paper_figures(job: FiguresJob, results: dict, ensemble: dict) -> list[str]:
             say(job.progress, f"  {name}: unchanged, kept")
             continue
         t0 = time.perf_counter()
-        extra = {"goals": goals} if "goals" in inspect.signature(module.make).parameters else {}
-        written = module.make(results, job.out_dir, model, ensemble=ensemble, **extra)
+        written = module.make(results, job.out_dir, model, ensemble=ensemble, goals=goals)
         stamps.record(name, stamp, written)
         files += written
         say(job.progress, f"  {name}: {len(written)} file(s), {time.perf_counter() - t0:.1f} s")
@@ -400,16 +398,12 @@ def _report_settings(job: FiguresJob, results: dict) -> dict:
 
 
 def ensemble_report(ensemble: dict, goals=None) -> list[dict]:
-    """The paper's claims judged on the ensembles, each entry with its ``statistics`` over the
-    members (``check.claim_statistics``): ``claims.ensemble_claims`` when the claims module has
-    it, otherwise ``claims.paper_claims`` of the member-0 summaries (over the same window);
-    ``goals``: the direction optima's outcomes (``optima.direction_outcomes``) for claim GT."""
+    """The paper's claims judged on the ensembles (``claims.ensemble_claims``), each entry with its
+    ``statistics`` over the members (``check.claim_statistics``); ``goals``: the direction optima's outcomes (``optima.direction_outcomes``) for claim GT."""
     from . import claims as claims_mod
     from .check import claim_statistics
 
-    judge = getattr(claims_mod, "ensemble_claims", None)
-    report = judge(ensemble, goals) if judge else claims_mod.paper_claims({g: m[0] for g, m in ensemble.items()},
-                                                                          goals)
+    report = claims_mod.ensemble_claims(ensemble, goals)
     stats = claim_statistics(ensemble, lambda summaries: claims_mod.paper_claims(summaries, goals))
     for entry in report:
         if entry["id"] in stats:

@@ -164,7 +164,8 @@ def say(name: str, record: dict) -> None:
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None,
+         goals: dict | None = None) -> list[str]:
     """Write ``anim_<gait>.gif`` for every gait in ``results`` (MuJoCo's rendering if it works
     here, else matplotlib's) and the note ``animations.json``; return their paths, the note last.
 

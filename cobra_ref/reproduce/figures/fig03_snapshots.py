@@ -87,7 +87,8 @@ def legend_panel(ax, times: list) -> None:
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model, ensemble: dict | None = None, goals: dict | None = None) -> list[str]:
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None,
+         goals: dict | None = None) -> list[str]:
     """Write ``fig03_snapshots.png/.pdf``: one top view per gait, all on the same axes, with the
     snapshots, the box's path and, from ``goals`` ({gait: (dx, dy)} relative to the box's start),
     each gait's goal.

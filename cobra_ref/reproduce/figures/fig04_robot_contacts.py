@@ -106,7 +106,8 @@ def lifted_note(model, rows) -> str:
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None,
+         goals: dict | None = None) -> list[str]:
     """Write ``fig04_robot_contacts.png/.pdf``: per gait, the ground-contact timeline of head,
     L1..L10 and tail, and the normal and tangential robot-ground forces per body over time.
 

@@ -85,7 +85,8 @@ def touching_links(model, in_contact: np.ndarray) -> str:
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None,
+         goals: dict | None = None) -> list[str]:
     """Write ``fig05_box_contacts.png/.pdf``: per gait, robot-box and box-ground normal and
     tangential forces over time.
 

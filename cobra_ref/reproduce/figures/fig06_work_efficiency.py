@@ -76,7 +76,8 @@ def plot_slopes(ax, rows, ensemble: dict) -> None:
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None,
+         goals: dict | None = None) -> list[str]:
     """Write ``fig06_work_efficiency.png/.pdf``: W_loc against W_box for every gait, with the fitted
     slope of each in the legend; with ``ensemble``, a panel of its own with the members' slopes.
 

@@ -48,7 +48,8 @@ def plot_power(ax, traj, color: str) -> np.ndarray:
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None,
+         goals: dict | None = None) -> list[str]:
     """Write ``fig07_power.png/.pdf``: P_loc (solid) and |P|_loc (dashed) [W] per gait over time,
     on one y scale that holds every peak.
 

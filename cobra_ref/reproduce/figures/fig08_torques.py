@@ -104,7 +104,8 @@ def draw_limits(axes, limit: float) -> None:
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None,
+         goals: dict | None = None) -> list[str]:
     """Write ``fig08_torques.png/.pdf``: per gait, tau [N m] of every pitch joint (left) and every
     yaw joint (right), J5 and J6 bold, each labelled with its phase lag, with the +-tau_max limit,
     on one y scale.

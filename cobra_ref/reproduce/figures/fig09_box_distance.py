@@ -131,7 +131,8 @@ def plot_net(ax, rows, distances: list, scale: float, unit: str) -> None:
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None,
+         goals: dict | None = None) -> list[str]:
     """Write ``fig09_box_distance.png/.pdf``: the box's net displacement over time, the final net
     displacement and path length per gait, the box's path, and with ``ensemble`` the members' net
     displacements on a panel of their own.

@@ -129,7 +129,8 @@ def plot_box(ax, model, traj, colors: list, idx: list) -> None:
 
 
 @common.paper_style
-def make(results: dict, out_dir: str, model, ensemble: dict | None = None) -> list[str]:
+def make(results: dict, out_dir: str, model, ensemble: dict | None = None,
+         goals: dict | None = None) -> list[str]:
     """Write ``fig_contact_points.png/.pdf``: per gait, the robot-ground contact points from above
     and the robot-box and box-ground contact points on the box's unfolded faces.
 
