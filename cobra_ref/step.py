@@ -187,7 +187,8 @@ def step(model: Model, q, qd, t: float, reference, settings: StepSettings = Step
     # Step 5: eq. (5), the rows J over F, the Delassus matrix G and the least-action problem
     J = np.vstack([J_c, servo.jacobian(model.nv, joints)])
     G, Minv_JT = delassus(J[:, F], M[np.ix_(F, F)])
-    problem = least_action_problem(model, G, J @ qd_next, contacts, settings, servo_start(joints, q, qd, servo_ref))
+    problem = least_action_problem(model, G, J @ qd_next, contacts, settings, servo_start(joints, q, qd, servo_ref),
+                                   J_c[0::3] @ qd)
     system = StepSystem(q, qd, M, h, tau_ext, qd_next, F, Minv_JT, contacts, J_c, G, problem, joints, q_ref,
                         potential_energy(model, q))
     # Step 6: eq. (6), the impulses, starting from the previous step's
@@ -234,17 +235,18 @@ def joint_coordinates(model: Model) -> JointCoordinates:
 
 
 def least_action_problem(model: Model, G, c_free, contacts: Contacts, settings: StepSettings,
-                         start: ServoStart) -> LeastAction:
+                         start: ServoStart, w_start) -> LeastAction:
     """The least-action problem of eq. (6): H = G + R and c = J qd_free + b over the rows.
 
     Implements: [COBRA] eq. (5)-(6) with each row's compliance R and offset b
     (:mod:`cobra_ref.compliance`): contact normals and friction under ``settings.law``, then the
     rows of ``settings.joint_servo`` (the position servo's, from ``start``: the joints' state and
-    reference at the step's start), bounded by tau_max dt.
+    reference at the step's start), bounded by tau_max dt. ``w_start`` (m,): the contacts' normal
+    rates J_N qd before the step, which the compliant law's damper reads below dt = d / k.
     """
     m, dt, law = contacts.m, settings.dt, settings.law
     d = G.diagonal()
-    R_N, b_N = law.normal_rows(model, contacts.g, d[0:3 * m:3], dt)
+    R_N, b_N = law.normal_rows(model, contacts.g, d[0:3 * m:3], dt, w_start)
     R, b = np.zeros(len(d)), np.zeros(len(d))
     R[0:3 * m:3], b[0:3 * m:3] = R_N, b_N
     R[1:3 * m:3] = law.tangential_compliance(d[1:3 * m:3])

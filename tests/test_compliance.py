@@ -1,10 +1,12 @@
-"""The compliant contact's spring-damper over one step: where the spring is evaluated (compliance.py).
+"""The compliant contact's spring-damper over one step: where the spring and the damper act (compliance.py).
 
-The step applies f = -k (g + theta dt w) - d w to a contact's gap g, w its velocity after the
-step, with theta = max(0, 1 - d / (k dt)) (``contact_theta``). Worked examples: the step is
-stable and never overshoots, for every contact mass and time step; it adds no numerical damping
-while dt <= d / k; and a ball's rebound on a lightly damped ground then matches the exact
-solution of the contact law's ODE.
+The step applies f = -k (g + theta dt w) - d (theta_d w + (1 - theta_d) w_0) to a penetrating
+contact's gap g, w its rate after the step and w_0 before it, with theta = max(0, 1 - d / (k dt))
+(``contact_theta``) and theta_d = max(1/2 + u^2 / 2, 1 - m_c / (d dt)), u = min(1, k dt / d)
+(``contact_theta_d``). Worked examples: the step is stable and never overshoots, for every
+contact mass and time step; it adds no numerical damping while dt <= d / k; its damper weighs the
+rate after the step alone at dt >= d / k and tends to the trapezoid as dt -> 0; and a ball's
+rebound on a lightly damped ground then matches the exact solution of the contact law's ODE.
 """
 
 import numpy as np
@@ -12,7 +14,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from bodies import BALL_MASS, BALL_RADIUS, GRAVITY, at_height, ball, run
-from cobra_ref.compliance import CONTACT_LAWS, contact_theta
+from cobra_ref.compliance import CONTACT_LAWS, contact_theta, contact_theta_d
 from cobra_ref.step import StepSettings
 from cobra_ref.infra.validation import DT_MAX, DT_MIN
 
@@ -21,12 +23,14 @@ def step_map(model, mass: float, dt: float) -> np.ndarray:
     """The 2 x 2 matrix A with (g+, w+) = A (g, w) of one engaged contact of mass ``mass`` without gravity.
 
     The contact row's optimality condition w+ + R x + b = 0 with w+ = w + x / mass (G = 1 / mass),
-    then g+ = g + dt w+; (R, b) from the compliant law's ``normal_rows`` of a penetrating contact (g <= 0),
-    which is linear in g (b = 0 at g = 0): the columns are probed at g = -1 (and negated) and w = 1.
+    then g+ = g + dt w+; (R, b) from the compliant law's ``normal_rows`` of a contact that penetrates
+    through the step's window (g <= 0, its rate before the step w), which is linear in (g, w) (b = 0
+    at g = w = 0): the columns are probed at g = -1 (and negated) and w = 1 (at g = 0).
     """
     A = np.zeros((2, 2))
     for j, (g, w, sign) in enumerate([(-1.0, 0.0, -1.0), (0.0, 1.0, 1.0)]):
-        R, b = np.broadcast_arrays(*CONTACT_LAWS["compliant"].normal_rows(model, np.array([g]), np.array([1.0 / mass]), dt))
+        R, b = np.broadcast_arrays(*CONTACT_LAWS["compliant"].normal_rows(model, np.array([g]), np.array([1.0 / mass]),
+                                                                          dt, np.array([w])))
         x = -(w + b[0]) / (1.0 / mass + R[0])
         w_next = w + x / mass
         A[:, j] = sign * (g + dt * w_next), sign * w_next
@@ -54,17 +58,38 @@ def test_a_contact_step_is_stable_for_every_mass_and_a_light_contact_never_overs
 
 
 def test_the_contact_spring_adds_no_damping_while_dt_is_at_most_d_over_k():
-    """The step's damping is d + theta k dt, from R = 1 / (dt (d + theta k dt)): d itself for dt <= d / k
-    (theta = 0: the spring at the step's start), and k dt above (theta = 1 - d / (k dt)); the
-    backward-Euler spring (theta = 1) would double the paper's damping at dt = 1 ms."""
+    """A heavy contact (1 kg) penetrating by 10 um, rising at w_0 = 1 mm/s before the step: its row's
+    impulse as a function of the rate after the step w, x(w) = -(w + b) / R, is the law by hand,
+    x = -k (g + theta dt w) dt - d dt (theta_d w + (1 - theta_d) w_0). The damping on w,
+    1 / (R dt) = theta_d d + theta k dt, is the paper's d at dt = d / k (theta_d = 1, theta = 0),
+    k dt above it (theta = 1 - d / (k dt)), and below it theta_d d: the rest of d acts on w_0, no
+    numerical damping added. The backward-Euler spring (theta = 1) would double d at 1 ms."""
     model = ball()
     k, d = model.contact_stiffness, model.contact_damping
+    g, w_0 = -1e-5, 1e-3
     for dt in (DT_MIN, 5e-4, 1e-3, 1.5e-3, 2e-3, DT_MAX):
-        R, b = np.broadcast_arrays(*CONTACT_LAWS["compliant"].normal_rows(model, np.array([-1e-5]), np.array([1.0]), dt))
-        damping = 1.0 / (R[0] * dt)
-        np.testing.assert_allclose(damping, max(d, k * dt), rtol=1e-12)
-        np.testing.assert_allclose(b[0], k * -1e-5 / damping, rtol=1e-12)  # the spring's force k g over that damping
-        np.testing.assert_allclose(contact_theta(k, d, dt), max(0.0, 1.0 - d / (k * dt)), rtol=0, atol=1e-15)
+        R, b = np.broadcast_arrays(*CONTACT_LAWS["compliant"].normal_rows(model, np.array([g]), np.array([1.0]), dt,
+                                                                          np.array([w_0])))
+        theta, theta_d = max(0.0, 1.0 - d / (k * dt)), contact_theta_d(np.array([1.0]), k, d, dt)[0]
+        np.testing.assert_allclose(1.0 / (R[0] * dt), theta_d * d + theta * k * dt, rtol=1e-12)
+        np.testing.assert_allclose(1.0 / (R[0] * dt), max(d, k * dt) if dt >= d / k else theta_d * d, rtol=1e-12)
+        for w in (-0.01, 0.0, 0.02):
+            by_hand = -k * (g + theta * dt * w) * dt - d * dt * (theta_d * w + (1.0 - theta_d) * w_0)
+            np.testing.assert_allclose(-(w + b[0]) / R[0], by_hand, rtol=1e-9)
+        np.testing.assert_allclose(contact_theta(k, d, dt), theta, rtol=0, atol=1e-15)
+
+
+def test_the_damper_weighs_the_rate_after_the_step_at_d_over_k_and_the_mean_rate_as_dt_falls():
+    """theta_d of the paper's k, d: exactly 1 at dt >= d / k = 1 ms for every contact mass (the
+    window is the step; the figures' step is unchanged by the window), 1/2 + (k dt / d)^2 / 2 for a
+    heavy contact below it (0.625 at 0.5 ms, 0.5003 at 25 us: the trapezoid, second order), and for
+    a light one (1 g) the bound 1 - m_c / (d dt) (0.998 at 0.5 ms)."""
+    k, d = 1e6, 1e3
+    for dt in (1e-3, 1.5e-3, DT_MAX):
+        assert np.all(contact_theta_d(1.0 / np.array([1e-9, 1e-3, 1.0, 100.0]), k, d, dt) == 1.0)
+    np.testing.assert_allclose(contact_theta_d(np.array([1.0]), k, d, 5e-4), 0.625, rtol=1e-12)
+    np.testing.assert_allclose(contact_theta_d(np.array([1.0]), k, d, 2.5e-5), 0.5 + 0.5 * 0.025**2, rtol=1e-12)
+    np.testing.assert_allclose(contact_theta_d(np.array([1e3]), k, d, 5e-4), 1.0 - 1e-3 / (d * 5e-4), rtol=1e-12)
 
 
 def exact_rebound(k: float, d: float, v0: float = 1.0) -> float:

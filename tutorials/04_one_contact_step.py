@@ -161,6 +161,9 @@ for name, c in cases.items():
 # much as d itself at dt = 1 ms. theta = 0 takes it at the step's start and adds none; it is
 # used up to dt = d / k (1 ms here), and above, theta grows just enough that a light contact's
 # gap does not overshoot (tests/test_compliance.py shows the step stable for every mass).
+# Below dt = d / k the damper also leans back on the rate before the step, w_0:
+# `theta_d w + (1 - theta_d) w_0` with `theta_d = compliance.contact_theta_d` -> 1/2 as dt -> 0,
+# which makes the step second order; at 1 ms theta_d = 1 and the rows are the ones above.
 #
 # At rest (w = 0) under its weight (x = m g dt) the row gives `R m g dt = -b`, that is
 # `g_gap = -m g / k`: the ball sinks by the **static sag** m g / k. We check it with
@@ -334,7 +337,9 @@ J = np.vstack([J_c, np.eye(model.nv)[joints.v]])
 G, Minv_JT = delassus(J, M)
 print(f"J: {J.shape}, G: {G.shape}, rank G = {np.linalg.matrix_rank(G)}")
 q_ref, qd_ref, _ = ref(0.0)  # the joints' reference at the step's start, which the servo follows
-problem = least_action_problem(model, G, J @ u_free, contacts, settings, servo_start(joints, q, qd, (q_ref, qd_ref)))
+w_start = J_c[0::3] @ qd  # the contacts' normal rates before the step (the compliant damper reads them below 1 ms)
+problem = least_action_problem(model, G, J @ u_free, contacts, settings, servo_start(joints, q, qd, (q_ref, qd_ref)),
+                               w_start)
 R_rows, b_rows = np.diag(problem.H - G), problem.c - J @ u_free
 
 # %% [markdown]

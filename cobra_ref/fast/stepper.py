@@ -102,7 +102,8 @@ class FastStepper:
         B = _trtrs(L, J[:, F].T, lower=1)[0]
         Minv_JT = _trtrs(L, B, lower=1, trans=1)[0]
         G = B.T @ B
-        problem = least_action_problem(model, G, J @ qd_next, contacts, s, servo_start(self.joints, q, qd, servo_ref))
+        problem = least_action_problem(model, G, J @ qd_next, contacts, s, servo_start(self.joints, q, qd, servo_ref),
+                                       J_c[0::3] @ qd)
         clock.append(time.perf_counter())
         # Step 6: eq. (6); where the certified solves leave the fixed point unconverged (their exact
         # active sets can send Newton's guess elsewhere than OSQP's answers do), the reference step's
