@@ -132,11 +132,17 @@ class RollingGait(_Periodic):
 
     def __call__(self, t: float):
         phi, phid, phidd = self._phase(t)
-        kappa = self._kappa
-        q = kappa * np.where(YAW, np.cos(phi), np.sin(phi))
-        dq = kappa * np.where(YAW, -np.sin(phi), np.cos(phi))  # d theta / d phi
+        q, dq = rolling_shape(self._kappa, phi)
         # chain rule: qd = dq phi', qdd = d2q phi'^2 + dq phi'', and d2q = -q for sines and cosines
         return q, dq * phid, -q * phid**2 + dq * phidd
+
+
+def rolling_shape(kappa: np.ndarray, phi: float):
+    """(theta, d theta / d phi) of lateral rolling with the bend profile kappa at the phase phi:
+    theta_i = kappa_i cos(phi) on the yaw joints, kappa_i sin(phi) on the pitch joints."""
+    q = kappa * np.where(YAW, np.cos(phi), np.sin(phi))
+    dq = kappa * np.where(YAW, -np.sin(phi), np.cos(phi))
+    return q, dq
 
 
 @dataclass(frozen=True)
@@ -160,11 +166,15 @@ class SidewindingGait(_Periodic):
 
     def __call__(self, t: float):
         phi, phid, phidd = self._phase(t)
-        i = np.arange(N_JOINTS)
-        arg = phi - self.spatial_frequency * i + np.where(YAW, 0.0, self.delta)
-        A = np.where(YAW, self.amplitude_yaw, self.amplitude_pitch)
-        q, dq = A * np.sin(arg), A * np.cos(arg)
+        q, dq = self.shape(phi)
         return q, dq * phid, -q * phid**2 + dq * phidd
+
+    def shape(self, phi: float):
+        """(theta, d theta / d phi) at the phase phi: A_i sin(phi - Omega i + delta_i), delta_i = 0 on
+        the yaw joints and delta on the pitch joints."""
+        arg = phi - self.spatial_frequency * np.arange(N_JOINTS) + np.where(YAW, 0.0, self.delta)
+        A = np.where(YAW, self.amplitude_yaw, self.amplitude_pitch)
+        return A * np.sin(arg), A * np.cos(arg)
 
 
 GAITS = {

@@ -40,6 +40,18 @@ def impact_term(traj: Trajectory, weight: float, duration: float) -> float:
     return float(np.sum(traj.steps["impact_impulse"])) / (weight * duration)
 
 
+def effort_term(traj: Trajectory, tau_max: float, duration: float) -> float:
+    """E = integral ||tau||^2 dt / (n tau_max^2 T), dimensionless: the joints' mean squared torque
+    over tau_max^2 (n joints, T = ``duration``)."""
+    return traj.dt * float(np.sum(traj.tau**2)) / (traj.tau.shape[1] * tau_max**2 * duration)
+
+
+def excess_term(traj: Trajectory, key: str, limit: float, duration: float) -> float:
+    """P = integral max(0, excess) dt / (limit T), dimensionless: ``steps[key]`` (a limit's excess per
+    step, max_i |.| - limit) where it is positive, over the limit and T = ``duration``."""
+    return traj.dt * float(np.sum(np.maximum(traj.steps[key], 0.0))) / (limit * duration)
+
+
 def shooting_cost(problem: ShootingProblem, traj: Trajectory) -> dict:
     """The cost J of a rollout and its terms (module docstring).
 
@@ -48,15 +60,12 @@ def shooting_cost(problem: ShootingProblem, traj: Trajectory) -> dict:
 
         J = w_e E + w_g (d_T / d_0)^2 + w_I I + w_tau P_tau + w_q P_q
     """
-    cp, w, T, dt = problem.cobra, problem.weights, problem.duration, traj.dt
-    # E = integral ||tau||^2 dt / (n tau_max^2 T)
-    effort = dt * float(np.sum(traj.tau**2)) / (traj.tau.shape[1] * cp.tau_max**2 * T)
+    cp, w, T = problem.cobra, problem.weights, problem.duration
+    effort = effort_term(traj, cp.tau_max, T)
     # d_T = |p_box(T) - p_goal|, d_0 = |goal|
     d_T = float(np.linalg.norm(traj.box_pose[-1, :2] - problem.goal_world))
     goal = (d_T / float(np.hypot(*problem.goal))) ** 2
-    # P = integral max(0, excess) dt / (limit T), excess = max_i |.| - limit per step
-    p_tau = dt * float(np.sum(np.maximum(traj.steps["tau_excess"], 0.0))) / (cp.tau_max * T)
-    p_q = dt * float(np.sum(np.maximum(traj.steps["q_excess"], 0.0))) / (cp.q_max * T)
+    p_tau, p_q = excess_term(traj, "tau_excess", cp.tau_max, T), excess_term(traj, "q_excess", cp.q_max, T)
     # I = sum of the impacts' impulses / (m_robot g T)
     impact = impact_term(traj, robot_weight(cobra_model(cp)), T)
     cost = w.effort * effort + w.goal * goal + w.impact * impact + w.tau * p_tau + w.q * p_q

@@ -34,7 +34,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..gaits import N_JOINTS, Q_MAX, S, YAW, RollingGait, SidewindingGait, smoothstep
+from ..gaits import N_JOINTS, Q_MAX, S, YAW, RollingGait, SidewindingGait, rolling_shape, smoothstep
 
 BLEND_TIME = 0.25  # [s] a switch's blend of shape and phase rate (the optimizer's ramp, RAMP_TIME)
 ROLLING = ("C", "S", "S-mirror", "J", "J-mirror")
@@ -92,15 +92,8 @@ class _Shape:
             self.kappa, self.sidewinding = None, SidewindingGait(amplitude_yaw=p.amplitude, amplitude_pitch=p.amplitude)
 
     def __call__(self, phi: float):
-        if self.kappa is not None:
-            c, s = np.cos(phi), np.sin(phi)
-            f = self.kappa * np.where(YAW, c, s)
-            df = self.kappa * np.where(YAW, -s, c)
-            return f, df, -f
-        g = self.sidewinding
-        arg = phi - g.spatial_frequency * np.arange(N_JOINTS) + np.where(YAW, 0.0, g.delta)
-        f = g.amplitude_yaw * np.sin(arg)
-        return f, g.amplitude_yaw * np.cos(arg), -f
+        f, df = rolling_shape(self.kappa, phi) if self.kappa is not None else self.sidewinding.shape(phi)
+        return f, df, -f
 
 
 class PlanReference:

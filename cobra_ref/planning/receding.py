@@ -49,7 +49,7 @@ from ..robots import cobra_model
 from ..simulate import Run
 from ..start import initial_state
 from ..step import SimulationError, StepSettings
-from .cost import impact_term, robot_weight
+from .cost import effort_term, excess_term, impact_term, robot_weight
 from .primitives import ROLLING, PlanReference, Primitive
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
@@ -165,9 +165,9 @@ def candidate_cost(job: Rollout) -> dict:
     d_mid = float(np.linalg.norm(traj.box_pose[n_period, :2] - target))
     d_end = float(np.linalg.norm(traj.box_pose[-1, :2] - target))
     duration = traj.duration
-    effort = o.settings.dt * float(np.sum(traj.tau**2)) / (traj.tau.shape[1] * o.cobra.tau_max**2 * duration)
+    effort = effort_term(traj, o.cobra.tau_max, duration)
     impact = impact_term(traj, robot_weight(model), duration)
-    p_tau = o.settings.dt * float(np.sum(np.maximum(traj.steps["tau_excess"], 0.0))) / (o.cobra.tau_max * duration)
+    p_tau = excess_term(traj, "tau_excess", o.cobra.tau_max, duration)
     approach = pushing_distance(model, traj.q[-1], target, o.cobra) if o.w_approach else 0.0
     cost = d_end + 0.5 * d_mid + o.w_approach * approach + o.w_effort * effort + o.w_impact * impact + o.w_tau * p_tau
     return {"cost": cost, "distance": d_end, "box": traj.box_pose[-1, :2].tolist(), "error": None}
