@@ -106,6 +106,16 @@ def test_check_compares_every_cell_so_a_changed_verdict_or_count_is_a_mismatch()
     assert any("map:box 2 kg:WB" in line for line in compare_claims(before, flipped))
 
 
+def test_check_catches_a_changed_count_under_an_unchanged_verdict():
+    """2 of 4 members and 3 of 4 are both "undecided": the verdicts agree, and only the cell's
+    fraction (0.50 committed, 0.75 regenerated) tells the runs apart. --check names it."""
+    before = check_entries(_map({"mu_rb 1.0": {"E": (2, 4)}}))
+    after = check_entries(_map({"mu_rb 1.0": {"E": (3, 4)}}))
+    assert before[0]["verdict"] == after[0]["verdict"] == "undecided"
+    lines = compare_claims(before, after)
+    assert lines and all("map:mu_rb 1.0:E fraction" in line for line in lines), lines
+
+
 def test_judge_evaluates_each_set_up_by_the_claims_rules(monkeypatch):
     """Summaries stand in for the runs: sidewinding does the most work on the box only at 0.30 m."""
     class Run:
