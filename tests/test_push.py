@@ -107,6 +107,20 @@ def test_a_benchmark_subset_writes_rows_and_a_picture(tmp_path):
     assert (tmp_path / "paths.png").stat().st_size > 1000
 
 
+def test_the_benchmark_on_a_dask_cluster_gives_exactly_the_serial_rows():
+    # the same task, its rollouts distributed by a Dask cluster's executor: the same choices, the same run
+    distributed = pytest.importorskip("distributed", reason="dask is an optional extra: pip install 'cobra-ref[dask]'")
+    from cobra_ref.planning.benchmark import run_benchmark
+
+    tasks = (("ahead", (0.05, 0.0), ()),)
+    serial = run_benchmark(TINY, SerialExecutor(), tasks=tasks)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        on_dask = run_benchmark(TINY, client.get_executor(), tasks=tasks)
+    for key in ("final_error", "box_path", "rollouts", "simulated_time", "impact_impulse_per_second", "reason"):
+        assert on_dask[0][key] == serial[0][key], key
+
+
 def test_the_pushing_point_lies_behind_the_box_on_the_line_from_the_target():
     # put the box so that the pushing point for a target 0.25 m ahead of it (+x) is exactly the head's
     # centre of mass: half a box and a link radius behind the box centre; the distance is then zero
