@@ -71,9 +71,9 @@ The rows (assumption ids refer to ``docs/assumptions.md``), each law and servo a
   dt >= d / k (the figures' 1 ms) theta_d = 1: the damper acts on the velocity after the step, and
   the window is the step itself. As dt -> 0, theta_d = 1/2 + O(dt^2): the window is centred on t,
   the spring at t and the damper on the mean rate are the leapfrog's, and the step converges to
-  the ODE at second order (tests/test_contact_ode.py: every ball within 0.3 % at 0.025 ms). A
-  damper on w alone lags by half a step: first order, too slow to meet the over-damped release,
-  where k |g| and d g' differ by 13 %. The second bound is the servo's rule below: it leans
+  the ODE at second order (tests/test_contact_ode.py; the measured errors are in docs/results.md).
+  A damper on w alone lags by half a step: first order, too slow to meet the over-damped release,
+  where k |g| and d g' nearly cancel. The second bound is the servo's rule below: it leans
   a light contact's damper towards w just as far as keeps the step stable (for dt <= 2 d / k,
   k dt^2 (1 - 2 theta) < 4 m_c + 2 (2 theta_d - 1) d dt) and its gap from flipping sign. The shape
   u^2 is a choice: any weight that is 1 at d / k and 1/2 + O(dt^2) as dt -> 0 has these properties.
@@ -138,7 +138,7 @@ class CompliantLaw:
 
     name = "compliant"
 
-    def normal_rows(self, model, g: np.ndarray, G_NN: np.ndarray, dt: float, w_start=0.0):
+    def normal_rows(self, model, g: np.ndarray, G_NN: np.ndarray, dt: float, w_start):
         """(R_N, b_N) (m,) each: the spring-damper over the step's window (module docstring) on the
         gap g of a contact that penetrates at the step's start, its spring at ``contact_theta``;
         the damper's impulse after touch-down, x = -d (g + theta_d dt w), on a contact that starts
@@ -175,7 +175,7 @@ class RigidLaw:
 
     name = "rigid"
 
-    def normal_rows(self, model, g: np.ndarray, G_NN: np.ndarray, dt: float, w_start=0.0):
+    def normal_rows(self, model, g: np.ndarray, G_NN: np.ndarray, dt: float, w_start):
         """(R_N, b_N) (m,) each (``w_start`` is not read): Signorini at the velocity level, a gap closing at most within the
         step (b = g / dt), a penetration removed at the rate BAUMGARTE g / dt, R = RIGID_COMPLIANCE G_NN.
 
