@@ -66,18 +66,18 @@ The rows (assumption ids refer to ``docs/assumptions.md``), each law and servo a
   window's end, g + theta_d dt w, stays positive (no force across a gap), and the law is
   continuous at touch-down (both rows give x = -theta_d d dt w as g -> 0).
 
-  How far the window leans back (``contact_theta_d``):
-  theta_d = max(1/2 + u^2 / 2, 1 - m_c / (d dt)), u = min(1, k dt / d), m_c = 1 / G_ii. At
-  dt >= d / k (the figures' 1 ms) theta_d = 1: the damper acts on the velocity after the step, and
-  the window is the step itself. As dt -> 0, theta_d = 1/2 + O(dt^2): the window is centred on t,
-  the spring at t and the damper on the mean rate are the leapfrog's, and the step converges to
-  the ODE at second order (tests/test_contact_ode.py; the measured errors are in docs/results.md).
-  A damper on w alone lags by half a step: first order, too slow to meet the over-damped release,
-  where k |g| and d g' nearly cancel. The second bound is the servo's rule below: it leans
-  a light contact's damper towards w just as far as keeps the step stable (for dt <= 2 d / k,
-  k dt^2 (1 - 2 theta) < 4 m_c + 2 (2 theta_d - 1) d dt) and its gap from flipping sign. The shape
-  u^2 is a choice: any weight that is 1 at d / k and 1/2 + O(dt^2) as dt -> 0 has these properties.
-  As dt -> 0 the step converges to the unilateral spring-damper's ODE.
+  How far the window leans back (``contact_theta_d``): theta_d = 1 / (1 - exp(-h)) - 1 / h,
+  h = d dt / m_c, m_c = 1 / G_ii the mass the contact's row sees. It is the weight with which the
+  damper's step, x = -d dt (theta_d w + (1 - theta_d) w_0) on a free mass m_c, decays the rate by
+  (1 - (1 - theta_d) h) / (1 + theta_d h) = exp(-h) per step, exactly as the damper does
+  (exponential fitting). As dt -> 0, theta_d = 1/2 + h / 12 + O(h^3): the window is centred on t,
+  the spring at t and the damper on the mean rate are the leapfrog's, and since the lean h / 12
+  multiplies w - w_0 = O(dt) the step stays second order and converges to the unilateral
+  spring-damper's ODE (tests/test_contact_ode.py; the measured errors are in docs/results.md). A
+  damper on w alone (theta_d = 1) lags by half a step: first order. On a light contact (h large)
+  theta_d -> 1 - 1 / h, the servo's bound below: for every h, theta_d >= max(1/2, 1 - 1 / h), which
+  keeps the step stable for every mass at every dt (k dt^2 (1 - 2 theta) < 4 m_c + 2 (2 theta_d - 1) d dt)
+  and a light contact's gap from flipping sign.
   ``RigidLaw``: eq. (2)-(6) as written, the gap closes in one step (b = g / dt; a
   penetration is removed at the rate beta g / dt, ``BAUMGARTE``), with the small compliance
   R = ``RIGID_COMPLIANCE`` G_ii of MuJoCo's impedance (A15), so that redundant contacts get one
@@ -120,16 +120,22 @@ def contact_theta(k, d, dt: float):
     return np.maximum(0.0, 1.0 - np.asarray(d, dtype=float) / (np.asarray(k, dtype=float) * dt))
 
 
-def contact_theta_d(G_NN, k, d, dt: float):
-    """theta_d = max(1/2 + u^2 / 2, 1 - m_c / (d dt)), u = min(1, k dt / d), m_c = 1 / G_NN (m,):
-    how far the compliant contact's window reaches past the step's start.
+def contact_theta_d(G_NN, d, dt: float):
+    """theta_d = 1 / (1 - exp(-h)) - 1 / h, h = d dt / m_c, m_c = 1 / G_NN (m,): how far the
+    compliant contact's window reaches past the step's start.
 
-    Implements: the module docstring's window (assumption A12): 1 at dt >= d / k, 1/2 + O(dt^2) as
-    dt -> 0 (second order), and never below the light contact's bound 1 - m_c / (d dt) (stable,
-    no overshoot).
+    Implements: the module docstring's window (assumption A12): the weight with which a damper
+    step, theta_d on the rate after it and 1 - theta_d on the rate before, decays a contact's
+    rate by exp(-h) per step, as the damper does; 1/2 + h / 12 as dt -> 0, and at least
+    max(1/2, 1 - 1 / h) (stable, a light contact's gap never flips sign).
     """
-    u = min(1.0, k * dt / d)
-    return np.maximum(0.5 + 0.5 * u * u, 1.0 - 1.0 / (np.asarray(G_NN, dtype=float) * d * dt))
+    h = np.asarray(G_NN, dtype=float) * d * dt
+    small = h < 1e-2
+    # the series 1/2 + h/12 - h^3/720 + h^5/30240 where 1 / (1 - e^-h) - 1 / h loses digits
+    series = 0.5 + h / 12.0 - h**3 / 720.0 + h**5 / 30240.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        exact = 1.0 / -np.expm1(-h) - 1.0 / h
+    return np.where(small, series, exact)
 
 
 class CompliantLaw:
@@ -147,7 +153,7 @@ class CompliantLaw:
         Implements: the compliant normal contact law of the module docstring (A12).
         """
         k, d = model.contact_stiffness, model.contact_damping
-        theta_d = contact_theta_d(G_NN, k, d, dt)
+        theta_d = contact_theta_d(G_NN, d, dt)
         # the gap at the start of the step's window [t - (1 - theta_d) dt, t + theta_d dt]
         g_lo = g - (1.0 - theta_d) * dt * np.asarray(w_start, dtype=float)
         # penetrating at the step's start: the damper over the window's penetrating part
