@@ -2,11 +2,11 @@
 
 The step applies f = -k (g + theta dt w) - d (theta_d w + (1 - theta_d) w_0) to a penetrating
 contact's gap g, w its rate after the step and w_0 before it, with theta = max(0, 1 - d / (k dt))
-(``contact_theta``) and theta_d = max(1/2 + u^2 / 2, 1 - m_c / (d dt)), u = min(1, k dt / d)
-(``contact_theta_d``). Worked examples: the step is stable and never overshoots, for every
-contact mass and time step; it adds no numerical damping while dt <= d / k; its damper weighs the
-rate after the step alone at dt >= d / k and tends to the trapezoid as dt -> 0; and a ball's
-rebound on a lightly damped ground then matches the exact solution of the contact law's ODE.
+(``contact_theta``) and theta_d = 1 / (1 - exp(-h)) - 1 / h, h = d dt / m_c (``contact_theta_d``).
+Worked examples: the step is stable and never overshoots, for every contact mass and time step; it
+adds no numerical damping while dt <= d / k; its damper decays a contact's rate by exp(-h) per
+step, as the damper does, and tends to the trapezoid as dt -> 0; and a ball's rebound on a lightly
+damped ground then matches the exact solution of the contact law's ODE.
 """
 
 import numpy as np
@@ -61,35 +61,41 @@ def test_the_contact_spring_adds_no_damping_while_dt_is_at_most_d_over_k():
     """A heavy contact (1 kg) penetrating by 10 um, rising at w_0 = 1 mm/s before the step: its row's
     impulse as a function of the rate after the step w, x(w) = -(w + b) / R, is the law by hand,
     x = -k (g + theta dt w) dt - d dt (theta_d w + (1 - theta_d) w_0). The damping on w,
-    1 / (R dt) = theta_d d + theta k dt, is the paper's d at dt = d / k (theta_d = 1, theta = 0),
-    k dt above it (theta = 1 - d / (k dt)), and below it theta_d d: the rest of d acts on w_0, no
-    numerical damping added. The backward-Euler spring (theta = 1) would double d at 1 ms."""
+    1 / (R dt) = theta_d d + theta k dt, is theta_d d up to dt = d / k (theta = 0): the rest of d
+    acts on w_0, no numerical damping added; above it the spring adds k dt - d (theta = 1 - d / (k dt)). The backward-Euler spring (theta = 1) would double d at 1 ms."""
     model = ball()
     k, d = model.contact_stiffness, model.contact_damping
     g, w_0 = -1e-5, 1e-3
     for dt in (DT_MIN, 5e-4, 1e-3, 1.5e-3, 2e-3, DT_MAX):
         R, b = np.broadcast_arrays(*CONTACT_LAWS["compliant"].normal_rows(model, np.array([g]), np.array([1.0]), dt,
                                                                           np.array([w_0])))
-        theta, theta_d = max(0.0, 1.0 - d / (k * dt)), contact_theta_d(np.array([1.0]), k, d, dt)[0]
+        theta, theta_d = max(0.0, 1.0 - d / (k * dt)), contact_theta_d(np.array([1.0]), d, dt)[0]
         np.testing.assert_allclose(1.0 / (R[0] * dt), theta_d * d + theta * k * dt, rtol=1e-12)
-        np.testing.assert_allclose(1.0 / (R[0] * dt), max(d, k * dt) if dt >= d / k else theta_d * d, rtol=1e-12)
+        np.testing.assert_allclose(1.0 / (R[0] * dt), theta_d * d + max(0.0, k * dt - d), rtol=1e-12)
         for w in (-0.01, 0.0, 0.02):
             by_hand = -k * (g + theta * dt * w) * dt - d * dt * (theta_d * w + (1.0 - theta_d) * w_0)
             np.testing.assert_allclose(-(w + b[0]) / R[0], by_hand, rtol=1e-9)
         np.testing.assert_allclose(contact_theta(k, d, dt), theta, rtol=0, atol=1e-15)
 
 
-def test_the_damper_weighs_the_rate_after_the_step_at_d_over_k_and_the_mean_rate_as_dt_falls():
-    """theta_d of the paper's k, d: exactly 1 at dt >= d / k = 1 ms for every contact mass (the
-    window is the step; the figures' step is unchanged by the window), 1/2 + (k dt / d)^2 / 2 for a
-    heavy contact below it (0.625 at 0.5 ms, 0.5003 at 25 us: the trapezoid, second order), and for
-    a light one (1 g) the bound 1 - m_c / (d dt) (0.998 at 0.5 ms)."""
-    k, d = 1e6, 1e3
-    for dt in (1e-3, 1.5e-3, DT_MAX):
-        assert np.all(contact_theta_d(1.0 / np.array([1e-9, 1e-3, 1.0, 100.0]), k, d, dt) == 1.0)
-    np.testing.assert_allclose(contact_theta_d(np.array([1.0]), k, d, 5e-4), 0.625, rtol=1e-12)
-    np.testing.assert_allclose(contact_theta_d(np.array([1.0]), k, d, 2.5e-5), 0.5 + 0.5 * 0.025**2, rtol=1e-12)
-    np.testing.assert_allclose(contact_theta_d(np.array([1e3]), k, d, 5e-4), 1.0 - 1e-3 / (d * 5e-4), rtol=1e-12)
+def test_the_damper_step_decays_a_contacts_rate_as_the_damper_does():
+    """A contact of mass m_c = 1 / G under the damper alone, x = -d dt (theta_d w + (1 - theta_d) w_0):
+    its rate after the step is w = w_0 (1 - (1 - theta_d) h) / (1 + theta_d h), h = d dt / m_c, and
+    theta_d makes that exp(-h) w_0, the damper's own decay, at every h (from 1e-9 through the
+    series' switch at 1e-2 to 1e4; to 1e-11 where exp(-h) is below that formula's rounding). The weight is 1/2 + h / 12 + O(h^3) (the trapezoid as dt -> 0),
+    at least the light contact's bound 1 - 1 / h (0.9 at h = 10: within 5e-5 of it), and for the
+    paper's d at 1 ms the 1 kg ball's h = 1 gives e^-1 / (1 - e^-1) = 0.58198."""
+    d, dt = 1e3, 1e-3
+    h = np.concatenate([np.logspace(-9, 4, 131), [1e-2 * (1 - 1e-12), 1e-2]])
+    theta_d = contact_theta_d(h / (d * dt), d, dt)  # G = h / (d dt)
+    decay = (1 - (1 - theta_d) * h) / (1 + theta_d * h)
+    # the rounding of 1 - (1 - theta_d) h: about 1e-16 h, absolute
+    np.testing.assert_allclose(decay, np.exp(-h), rtol=1e-9, atol=1e-11)
+    small = h < 0.1
+    np.testing.assert_allclose(theta_d[small], 0.5 + h[small] / 12, rtol=0, atol=1e-5)
+    assert np.all(theta_d >= np.maximum(0.5, 1 - 1 / h))
+    assert contact_theta_d(np.array([10.0 / (d * dt)]), d, dt)[0] - 0.9 < 5e-5
+    np.testing.assert_allclose(contact_theta_d(np.array([1.0]), d, dt), np.exp(-1) / (1 - np.exp(-1)), rtol=1e-14)
 
 
 def exact_rebound(k: float, d: float, v0: float = 1.0) -> float:

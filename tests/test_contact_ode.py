@@ -57,12 +57,7 @@ def test_the_ode_lets_even_the_over_damped_balls_go():
         assert drop.rebound > 0.0
 
 
-# Known to fail, measured (docs/results.md, "Dropping a ball"): the 1 kg ball at 0.2 m/s and 1 ms, whose
-# contact lasts 2.7 steps (rebound 27 % slow). It stays here as a strict expected failure: it flips to
-# passing when the step gets there.
-SHORT_AT_1MS = pytest.mark.xfail(strict=True, reason="contact of 2.7 steps at 1 ms: rebound 27 % slow")
-CONVERGENCE_CASES = [pytest.param(m, v, marks=SHORT_AT_1MS) if (m, v) == (1.0, 0.2) else (m, v)
-                     for m in drops.MASSES for v in drops.SPEEDS]
+CONVERGENCE_CASES = [(m, v) for m in drops.MASSES for v in drops.SPEEDS]
 
 
 @pytest.mark.parametrize("mass,v0", CONVERGENCE_CASES)
