@@ -226,8 +226,7 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
         for k in range(n_budget):
             t = run.t
             pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=distance() <= NEAR)
-            results = _rollouts(executor, plan, run, pairs, targets[aim], o)
-            best = int(np.argmin([r["cost"] for r in results]))
+            best, results = replan(_jobs(plan, run, pairs, targets[aim], o), candidate_cost, executor)
             last = pairs[best][0]
             moving = last if last.family != "stop" else moving
             plan.extend(last, t)
@@ -253,13 +252,20 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     return PushResult(run.finish(), plan, cycles, targets[-1], reached, reason, time.perf_counter() - start)
 
 
-def _rollouts(executor, plan: PlanReference, run: Run, pairs: list, target, options: PushOptions) -> list:
-    """``candidate_cost`` of every pair from the state ``run`` has reached, in order (through ``executor``)."""
+def replan(jobs: list, predict, executor=None) -> tuple[int, list]:
+    """Steps 2-3 of a re-plan (module docstring): ``predict(job)`` -> {"cost": J, ...} of every
+    candidate's rollout, through ``executor`` (``predict`` at module level: picklable), and the index
+    of the cheapest (the first of equal costs). The plant then applies that candidate's first period."""
+    results = list((executor or SerialExecutor()).map(predict, jobs))
+    return int(np.argmin([r["cost"] for r in results])), results
+
+
+def _jobs(plan: PlanReference, run: Run, pairs: list, target, options: PushOptions) -> list:
+    """The ``Rollout`` of every pair from the state ``run`` has reached, in order."""
     # the plant's stepper memory (its last velocity, its impulses) holds for rollouts at its own dt only
     memory = run.stepping.memory if run.settings.dt == options.settings.dt else None
     plan_so_far, q, qd = plan.to_dict(), run.q, run.qd  # the same for every candidate
-    jobs = [Rollout(plan_so_far, pair, run.t, q, qd, memory, target, options) for pair in pairs]
-    return list((executor or SerialExecutor()).map(candidate_cost, jobs))
+    return [Rollout(plan_so_far, pair, run.t, q, qd, memory, target, options) for pair in pairs]
 
 
 def _name(p: Primitive) -> str:
