@@ -161,9 +161,10 @@ for name, c in cases.items():
 # much as d itself at dt = 1 ms. theta = 0 takes it at the step's start and adds none; it is
 # used up to dt = d / k (1 ms here), and above, theta grows just enough that a light contact's
 # gap does not overshoot (tests/test_compliance.py shows the step stable for every mass).
-# Below dt = d / k the damper also leans back on the rate before the step, w_0:
-# `theta_d w + (1 - theta_d) w_0` with `theta_d = compliance.contact_theta_d` -> 1/2 as dt -> 0,
-# which makes the step second order; at 1 ms theta_d = 1 and the rows are the ones above.
+# On the robot (section 8) the damper also leans back on the rate before the step, w_0:
+# `theta_d w + (1 - theta_d) w_0` with `theta_d = compliance.contact_theta_d = 1 / (1 - exp(-h)) - 1 / h`,
+# h = d dt / m_c: the weight that decays a contact of mass m_c by exactly exp(-h) per step, as the
+# damper does, and -> 1/2 as dt -> 0 (second order). Here, for the ball's rows by hand, theta_d = 1.
 #
 # At rest (w = 0) under its weight (x = m g dt) the row gives `R m g dt = -b`, that is
 # `g_gap = -m g / k`: the ball sinks by the **static sag** m g / k. We check it with
@@ -354,7 +355,14 @@ R_rows, b_rows = np.diag(problem.H - G), problem.c - J @ u_free
 
 # %%
 theta = compliance.contact_theta(k, d, dt)
-R_N_hand, b_N_hand = 1 / (dt * (theta * k * dt + d)), k * contacts.g / (theta * k * dt + d)
+# the damper's weight by exponential fitting, h = d dt / m_c with m_c = 1 / G_ii (section 4)
+h = d * dt * np.diag(G)[0:3 * contacts.m:3]
+theta_dN = 1 / (1 - np.exp(-h)) - 1 / h
+g_lo = contacts.g - (1 - theta_dN) * dt * w_start  # the gap at the start of the step's window
+penetrating = (theta * k * dt + theta_dN * d)  # a contact that penetrates at the step's start
+R_N_hand = np.where(contacts.g > 0, 1 / (theta_dN * d * dt), 1 / (dt * penetrating))
+b_N_hand = np.where(contacts.g > 0, contacts.g / (theta_dN * dt),
+                    (k * contacts.g + d * (contacts.g - np.minimum(g_lo, 0)) / dt) / penetrating)
 kp, kd = model.servo_kp, model.servo_kd
 theta_d = np.maximum(0.5, 1 - 1 / (np.diag(G)[3 * contacts.m:] * kd * dt))
 R_s_hand = 1 / (dt * theta_d * kd)
@@ -450,8 +458,8 @@ assert info_fp.converged and info_fp.iterations <= 2 and info_warm.converged and
 # %% [markdown]
 # * COBRA: the rows' compliances and offsets are the spring-damper's (ground) and the servo's
 #   (joints); the hand-built blocks reproduce `step` (impulses, u+, q+, torques); the ground
-#   carries the weight with the spring-damper's `f_N = -k (g + theta dt w_N) - d w_N`, nearly the
-#   static `-k g` since the robot has settled; eq. (2) holds; the fast stepper takes the
+#   carries the weight with the spring-damper's `f_N = -k (g + theta dt w_N) - d (theta_d w_N +
+#   (1 - theta_d) w_0)`, nearly the static `-k g` since the robot has settled; eq. (2) holds; the fast stepper takes the
 #   same step.
 
 # %%
@@ -464,9 +472,11 @@ assert res.contacts.keys() == contacts.keys() and info.converged
 for name, tol in (("p", 1e-12), ("u+", 1e-10), ("tau", 1e-9), ("q+", 1e-12)):
     np.testing.assert_allclose(*mine_theirs[name], atol=tol, err_msg=name)
 np.testing.assert_allclose(f_N.sum(), weight, rtol=1e-2)
-# the spring-damper law of the step: f_N = -k (g + theta dt w_N) - d w_N where loaded
+# the spring-damper law of the step where loaded (penetrating through the step's window):
+# f_N = -k (g + theta dt w_N) - d (theta_d w_N + (1 - theta_d) w_0)
 w_N = res.w[0::3]
-np.testing.assert_allclose(f_N[loaded], (-k * (contacts.g + theta * dt * w_N) - d * w_N)[loaded], rtol=1e-6)
+law = -k * (contacts.g + theta * dt * w_N) - d * (theta_dN * w_N + (1 - theta_dN) * w_start)
+np.testing.assert_allclose(f_N[loaded], law[loaded], rtol=1e-6)
 assert f_N[~loaded].max() < 1e-12 * f_N.max()
 assert max(res.residuals.values()) < 1e-6, res.residuals
 for name in ("p", "qd", "q", "tau"):
