@@ -161,7 +161,7 @@ for name, c in cases.items():
 # much as d itself at dt = 1 ms. theta = 0 takes it at the step's start and adds none; it is
 # used up to dt = d / k (1 ms here), and above, theta grows just enough that a light contact's
 # gap does not overshoot (tests/test_compliance.py shows the step stable for every mass).
-# On the robot (section 8) the damper also leans back on the rate before the step, w_0:
+# On the robot (section 6) the damper also leans back on the rate before the step, w_0:
 # `theta_d w + (1 - theta_d) w_0` with `theta_d = compliance.contact_theta_d = 1 / (1 - exp(-h)) - 1 / h`,
 # h = d dt / m_c: the weight that decays a contact of mass m_c by exactly exp(-h) per step, as the
 # damper does, and -> 1/2 as dt -> 0 (second order). Here, for the ball's rows by hand, theta_d = 1.
