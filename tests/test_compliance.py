@@ -62,7 +62,8 @@ def test_the_contact_spring_adds_no_damping_while_dt_is_at_most_d_over_k():
     impulse as a function of the rate after the step w, x(w) = -(w + b) / R, is the law by hand,
     x = -k (g + theta dt w) dt - d dt (theta_d w + (1 - theta_d) w_0). The damping on w,
     1 / (R dt) = theta_d d + theta k dt, is theta_d d up to dt = d / k (theta = 0): the rest of d
-    acts on w_0, no numerical damping added; above it the spring adds k dt - d (theta = 1 - d / (k dt)). The backward-Euler spring (theta = 1) would double d at 1 ms."""
+    acts on w_0, no numerical damping added; above it the spring adds k dt - d
+    (theta = 1 - d / (k dt)). The backward-Euler spring (theta = 1) would double d at 1 ms."""
     model = ball()
     k, d = model.contact_stiffness, model.contact_damping
     g, w_0 = -1e-5, 1e-3
@@ -82,9 +83,9 @@ def test_the_damper_step_decays_a_contacts_rate_as_the_damper_does():
     """A contact of mass m_c = 1 / G under the damper alone, x = -d dt (theta_d w + (1 - theta_d) w_0):
     its rate after the step is w = w_0 (1 - (1 - theta_d) h) / (1 + theta_d h), h = d dt / m_c, and
     theta_d makes that exp(-h) w_0, the damper's own decay, at every h (from 1e-9 through the
-    series' switch at 1e-2 to 1e4; to 1e-11 where exp(-h) is below that formula's rounding). The weight is 1/2 + h / 12 + O(h^3) (the trapezoid as dt -> 0),
-    at least the light contact's bound 1 - 1 / h (0.9 at h = 10: within 5e-5 of it), and for the
-    paper's d at 1 ms the 1 kg ball's h = 1 gives e^-1 / (1 - e^-1) = 0.58198."""
+    series' switch at 1e-2 to 1e4; to 1e-11 where exp(-h) is below that formula's rounding). The
+    weight is 1/2 + h / 12 + O(h^3) (the trapezoid as dt -> 0), at least the light contact's bound
+    1 - 1 / h (0.9 at h = 10: within 5e-5 of it), and for the paper's d at 1 ms the 1 kg ball's h = 1 gives e^-1 / (1 - e^-1) = 0.58198."""
     d, dt = 1e3, 1e-3
     h = np.concatenate([np.logspace(-9, 4, 131), [1e-2 * (1 - 1e-12), 1e-2]])
     theta_d = contact_theta_d(h / (d * dt), d, dt)  # G = h / (d dt)

@@ -359,7 +359,7 @@ theta = compliance.contact_theta(k, d, dt)
 h = d * dt * np.diag(G)[0:3 * contacts.m:3]
 theta_dN = 1 / (1 - np.exp(-h)) - 1 / h
 g_lo = contacts.g - (1 - theta_dN) * dt * w_start  # the gap at the start of the step's window
-penetrating = (theta * k * dt + theta_dN * d)  # a contact that penetrates at the step's start
+penetrating = theta * k * dt + theta_dN * d  # a contact that penetrates at the step's start
 R_N_hand = np.where(contacts.g > 0, 1 / (theta_dN * d * dt), 1 / (dt * penetrating))
 b_N_hand = np.where(contacts.g > 0, contacts.g / (theta_dN * dt),
                     (k * contacts.g + d * (contacts.g - np.minimum(g_lo, 0)) / dt) / penetrating)
@@ -459,8 +459,8 @@ assert info_fp.converged and info_fp.iterations <= 2 and info_warm.converged and
 # * COBRA: the rows' compliances and offsets are the spring-damper's (ground) and the servo's
 #   (joints); the hand-built blocks reproduce `step` (impulses, u+, q+, torques); the ground
 #   carries the weight with the spring-damper's `f_N = -k (g + theta dt w_N) - d (theta_d w_N +
-#   (1 - theta_d) w_0)`, nearly the static `-k g` since the robot has settled; eq. (2) holds; the fast stepper takes the
-#   same step.
+#   (1 - theta_d) w_0)`, nearly the static `-k g` since the robot has settled; eq. (2) holds; the
+#   fast stepper takes the same step.
 
 # %%
 np.testing.assert_allclose(R_rows[0:n_c:3], R_N_hand, rtol=1e-12)
