@@ -85,7 +85,8 @@ def test_the_damper_step_decays_a_contacts_rate_as_the_damper_does():
     theta_d makes that exp(-h) w_0, the damper's own decay, at every h (from 1e-9 through the
     series' switch at 1e-2 to 1e4; to 1e-11 where exp(-h) is below that formula's rounding). The
     weight is 1/2 + h / 12 + O(h^3) (the trapezoid as dt -> 0), at least the light contact's bound
-    1 - 1 / h (0.9 at h = 10: within 5e-5 of it), and for the paper's d at 1 ms the 1 kg ball's h = 1 gives e^-1 / (1 - e^-1) = 0.58198."""
+    1 - 1 / h (0.9 at h = 10: within 5e-5 of it), and for the paper's d at 1 ms the 1 kg ball's
+    h = 1 gives e^-1 / (1 - e^-1) = 0.58198."""
     d, dt = 1e3, 1e-3
     h = np.concatenate([np.logspace(-9, 4, 131), [1e-2 * (1 - 1e-12), 1e-2]])
     theta_d = contact_theta_d(h / (d * dt), d, dt)  # G = h / (d dt)
