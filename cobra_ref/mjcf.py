@@ -60,7 +60,7 @@ from .robots import neutral_q
 
 IMPEDANCE = 1e-4  # d: MuJoCo's smallest impedance (mjMINIMP); its force is then the spring-damper's (A27)
 IMPRATIO = 1e6  # R_T = R / IMPRATIO: hard friction rows, the cone keeps the normal force (A27)
-TIMESTEP = 1e-4  # [s] MuJoCo integrates the contact force explicitly; measured in docs/mujoco.md (A27)
+TIMESTEP = 5e-5  # [s] MuJoCo integrates the contact force explicitly: stable and accurate below it (A27, docs/mujoco.md)
 GROUND = "ground"
 KEY = "start"  # the keyframe of ``playable_mjcf``
 _AXIS = {"Rx": "1 0 0", "Ry": "0 1 0", "Rz": "0 0 1"}

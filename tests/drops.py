@@ -33,7 +33,7 @@ from cobra_ref.steppers import make_stepper
 MASSES = (0.1, 0.25, 1.0, 4.0)  # [kg]: damping ratio d / (2 sqrt(k m)) = 1.58, 1.0, 0.5, 0.25
 SPEEDS = (0.2, 0.5)  # [m/s] landing speeds v0
 DTS = (1e-3, 2.5e-4, 1e-4, 2.5e-5)  # [s] our step's dt, halved (and more) towards the ODE
-MJ_TIMESTEPS = (1e-4, 5e-5, 1e-5)  # [s] MuJoCo's: the export's TIMESTEP, and smaller
+MJ_TIMESTEPS = (1e-4, 5e-5, 1e-5)  # [s] MuJoCo's: 0.1 ms, the export's TIMESTEP (0.05 ms), and smaller
 GAP0 = 5e-4  # [m] the gap a drop starts at
 IMPULSE_TOL = 1e-9  # [N s] a step with a normal impulse above it carries a force
 AFTER = 3  # steps taken after the first episode's end (to see that it has ended)

@@ -125,7 +125,7 @@ def test_a_box_sliding_on_the_ground_decelerates_at_mu_g_in_both(angle, mu=0.5, 
 def test_the_timestep_resolves_the_explicit_contact_damping():
     """MuJoCo evaluates the contact force at the start of the step (d = 1e-4 leaves nothing implicit),
     so the box's heave, damped by its four corners at the rate 4 c / m = 8000 / s, is an explicit
-    damper: stable for dt < 2 m / (4 c) = 0.25 ms. At TIMESTEP = 0.1 ms the resting box comes to
+    damper: stable for dt < 2 m / (4 c) = 0.25 ms. At TIMESTEP = 0.05 ms the resting box comes to
     rest (|qd| < 1e-9 after 0.5 s); at 0.3 ms it never does (|qd| > 1e-3)."""
     model = box()
     q0, qd0 = at_height(model, BOX_SIDE / 2)

@@ -169,7 +169,7 @@ def test_a_plant_at_a_finer_dt_executes_the_plan_and_replays_it():
 
 
 def test_mujoco_as_the_plant_executes_the_plan_and_replays_it():
-    # the planner predicts with cobra_ref (2 ms), MuJoCo executes at its 0.1 ms step and is read back
+    # the planner predicts with cobra_ref (2 ms), MuJoCo executes at its 0.05 ms step and is read back
     pytest.importorskip("mujoco")
     from dataclasses import replace
 

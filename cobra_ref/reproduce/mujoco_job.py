@@ -7,7 +7,7 @@ settled start (q0, qd0) with its own friction scale, the box displacement after 
 seconds (or the ensemble window if shorter), ours read off the member's run. Every row is cached
 under a hash of its inputs (``mujoco_key``), checked on read (``cache.read_rows``).
 
-Why K = 4: MuJoCo's box rollouts run at 0.1 ms steps; 4 members per gait keep the comparison
+Why K = 4: MuJoCo's box rollouts run at 0.05 ms steps; 4 members per gait keep the comparison
 short on two cores and still give a spread (min-max of 4) to compare against (docs/results.md,
 "Time to regenerate").
 """
@@ -24,7 +24,7 @@ from .cache import read_rows, verified, write_rows
 from .stamps import Stamps, clean, figure_stamp, say
 
 MUJOCO_MEMBERS = 4  # members per gait in the MuJoCo box comparison: K = min(N, 4)
-BOX_DURATION = 3.0  # [s] the box comparison with MuJoCo (0.1 ms steps there: 30 000 per member)
+BOX_DURATION = 3.0  # [s] the box comparison with MuJoCo (0.05 ms steps there: 60 000 per member)
 
 
 def mujoco_submit(side, specs: dict, runs: dict, window_s: float, cache_dir: str, force: bool, progress) -> dict | None:

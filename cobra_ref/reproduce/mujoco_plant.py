@@ -3,7 +3,7 @@
 The planner (:func:`cobra_ref.planning.receding.push`) advances its plant one period at a time and
 reads its state back (q, qd: MuJoCo's qpos and qvel are cobra_ref's coordinates, A19). This plant
 runs :func:`cobra_ref.mjcf.to_mjcf` of the same model at MuJoCo's stable timestep (``mjcf.TIMESTEP``,
-0.1 ms, A27), its position actuators driven by the plan's reference at each of its steps
+0.05 ms, A27), its position actuators driven by the plan's reference at each of its steps
 (``mujoco_check.servo_control``: our servo law), and records the state every ``dt`` (1 ms). What
 MuJoCo does not report as our contact solve does (impacts, the contact log, the solver's residuals)
 is recorded as zero and named so in the run's meta. MuJoCo is deterministic: the same plan on
