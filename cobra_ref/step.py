@@ -296,10 +296,11 @@ def midpoint_velocity(qd: np.ndarray, previous: dict | None) -> np.ndarray:
 
     Implements: where the velocity-product terms C(q, qd) qd of eq. (1) (Coriolis, centripetal,
     gyroscopic) are evaluated. For one tumbling rigid body their energy error is then second order
-    in dt (at qd it is first order; ``tests/test_stepper_physics.py``). For the jointed chain the
-    step stays first order, since M(q) is taken at the step's start (docs/results.md, "The chain in
-    free flight"). w is linear in the velocities, so mirrored runs stay mirrored; gravity does not
-    depend on the velocity.
+    in dt (at qd it is first order; ``tests/test_stepper_physics.py``), and so is the jointed
+    chain's, with M(q) at the step's start, when a run's velocities are read as the step reads them:
+    qd as the velocity half a step back (q+ = q + dt qd+), so a start at qd0 - dt qdd0 / 2
+    (docs/results.md, "The chain in free flight"). w is linear in the velocities, so mirrored runs
+    stay mirrored; gravity does not depend on the velocity.
     """
     qd_prev = None if not previous else previous.get("qd")
     if qd_prev is None or np.shape(qd_prev) != np.shape(qd):
