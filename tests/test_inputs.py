@@ -721,6 +721,6 @@ def test_the_readme_links_the_option_tables_instead_of_holding_them():
 def test_the_option_table_names_every_option_with_unit_and_range():
     table = options_markdown()
     for row in ("| `--dt` | s | [1e-5, 0.005] | 0.001 |", "| `--mu` | - | [0, 2] | 1.0 |",
-                "| `--box-mass` | kg | [0.001, 100] | 0.5 |", "| `--timestep` | s | [1e-6, 0.002] | 0.0001 |",
+                "| `--box-mass` | kg | [0.001, 100] | 0.5 |", "| `--timestep` | s | [1e-6, 0.002] | 5e-5 |",
                 "| `--box-offset` | m | DX,DY: each [-5, 5] | - |"):
         assert row in table, row
