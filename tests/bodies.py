@@ -1,4 +1,5 @@
-"""Small models for worked examples: one free rigid body (a ball, a box), and a sphere beside a box.
+"""Small models for worked examples: one free rigid body (a ball, a box), a sphere beside a box, and
+COBRA tumbling in free flight.
 
 A free body has no revolute joint, so the servo has nothing to drive and every test below is
 a hand-solvable rigid body on the ground (M of its coordinates is blockdiag(m 1, I_com)).
@@ -6,7 +7,10 @@ a hand-solvable rigid body on the ground (M of its coordinates is blockdiag(m 1,
 
 import numpy as np
 
+from cobra_ref.kinematics import forward_kinematics
 from cobra_ref.model import BoxGeom, Model, SphereSet
+from cobra_ref.params import CobraParameters
+from cobra_ref.robots import cobra_model, random_state
 from cobra_ref.step import StepSettings
 from cobra_ref.steppers import make_stepper
 
@@ -91,3 +95,24 @@ def pressed_box_state(model, reference, depth):
     q = touching.copy()
     q[box:box + 2] -= depth * away / np.linalg.norm(away)
     return q
+
+
+def cobra_in_free_flight(seed=7):
+    """(model, q0, qd0): COBRA without gravity or box, joint torques under 1e-12 N m, tumbling from a
+    random state (``robots.random_state``) 100 m above the ground, where no contact is a candidate."""
+    model = cobra_model(CobraParameters(gravity=0.0, tau_max=1e-12), with_box=False)
+    q0, qd0 = random_state(model, np.random.default_rng(seed), scale=1.0)
+    q0[2] = 100.0
+    return model, q0, qd0
+
+
+def hold_joints(t):
+    """The reference that holds COBRA's 11 joints at zero (with tau_max = 1e-12, no torque)."""
+    return np.zeros(11), np.zeros(11), np.zeros(11)
+
+
+def centre_of_mass(model, q):
+    """(3,) the centre of mass of every body of ``model`` at q [m]."""
+    kin = forward_kinematics(model, q)
+    points = [kin.o[i] + kin.R[i] @ model.com[i] for i in range(model.nb)]
+    return np.average(points, axis=0, weights=model.mass)

@@ -8,27 +8,17 @@ Energy, linear and angular momentum and the centre of mass's straight line over 
   then qd0 + dt/2 a0) and the end's velocity is the mean of the last two (at t_N)."""
 import sys
 import numpy as np
-from cobra_ref.params import CobraParameters
-from cobra_ref.robots import cobra_model, random_state
+from bodies import centre_of_mass, cobra_in_free_flight, hold_joints
 from cobra_ref.dynamics import forward_dynamics, kinetic_energy, spatial_momentum
-from cobra_ref.kinematics import forward_kinematics
 from cobra_ref.step import StepSettings
 from cobra_ref.steppers import make_stepper
 
-model = cobra_model(CobraParameters(gravity=0.0, tau_max=1e-12), with_box=False)
-rng = np.random.default_rng(7)
-q0, qd0 = random_state(model, rng, scale=1.0)
-q0[2] = 100.0  # far above the ground: no candidate contact
-hold = lambda t: (np.zeros(11), np.zeros(11), np.zeros(11))
+model, q0, qd0 = cobra_in_free_flight()
 mass = sum(model.mass)
 a0 = forward_dynamics(model, q0, qd0, np.zeros(model.nv))
 
-def com(q):
-    kin = forward_kinematics(model, q)
-    return sum(m * (kin.o[i] + kin.R[i] @ model.com[i]) for i, m in enumerate(model.mass)) / mass
-
 T = float(sys.argv[1]) if len(sys.argv) > 1 else 2.0
-E0, h0, c0 = kinetic_energy(model, q0, qd0), spatial_momentum(model, q0, qd0), com(q0)
+E0, h0, c0 = kinetic_energy(model, q0, qd0), spatial_momentum(model, q0, qd0), centre_of_mass(model, q0)
 v_c = h0[3:] / mass  # the centre of mass's velocity (linear momentum / mass)
 for staggered in (False, True):
     for dt in (1e-3, 5e-4, 2.5e-4, 1.25e-4):
@@ -36,10 +26,10 @@ for staggered in (False, True):
         q, qd = q0.copy(), qd0 - 0.5 * dt * a0 if staggered else qd0.copy()
         n = int(round(T / dt))
         for k in range(n):
-            r = st.step(q, qd, k * dt, hold)
+            r = st.step(q, qd, k * dt, hold_joints)
             q, qd = r.q, r.qd
-        v = 0.5 * (qd + st.step(q, qd, n * dt, hold).qd) if staggered else qd
-        E, h, c = kinetic_energy(model, q, v), spatial_momentum(model, q, v), com(q)
+        v = 0.5 * (qd + st.step(q, qd, n * dt, hold_joints).qd) if staggered else qd
+        E, h, c = kinetic_energy(model, q, v), spatial_momentum(model, q, v), centre_of_mass(model, q)
         print(f"{'staggered' if staggered else 'as given'} dt {dt*1e3:g} ms: energy {100*(E-E0)/E0:+.4f} %  "
               f"linear momentum {100*np.linalg.norm(h[3:]-h0[3:])/np.linalg.norm(h0[3:]):.4f} %  "
               f"angular momentum {100*np.linalg.norm(h[:3]-h0[:3])/np.linalg.norm(h0[:3]):.4f} %  "

@@ -16,12 +16,11 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from bodies import (BALL_MASS, BALL_RADIUS, BOX_MASS, BOX_SIDE, GRAVITY, at_height, ball, ball_inertia, box,
-                    box_inertia, free_body, no_joints, run, sphere_and_box)
+                    box_inertia, centre_of_mass, cobra_in_free_flight, free_body, hold_joints, no_joints, run,
+                    sphere_and_box)
 from cobra_ref.compliance import BAUMGARTE, RIGID_COMPLIANCE
 from cobra_ref.dynamics import forward_dynamics, kinetic_energy, spatial_momentum
 from cobra_ref.fast.chain import ChainModel
-from cobra_ref.params import CobraParameters
-from cobra_ref.robots import cobra_model, random_state
 from cobra_ref.step import StepSettings
 from cobra_ref.steppers import STEPPERS, make_stepper
 
@@ -273,27 +272,15 @@ def test_a_tumbling_body_keeps_its_energy_to_second_order_in_dt(stepper):
 
 
 def _chain_line_error(dt, staggered: bool, T=0.5):
-    """|c(T) - (c0 + v_c T)| [m]: how far the centre of mass of COBRA in free flight (no gravity, no
-    contact, torques under 1e-12 N m) leaves its straight line, started from qd0 as given or staggered,
+    """|c(T) - (c0 + v_c T)| [m]: how far the centre of mass of COBRA in free flight
+    (``bodies.cobra_in_free_flight``) leaves its straight line, started from qd0 as given or staggered,
     from qd0 - dt qdd0 / 2 (the velocity half a step back, as the step reads it)."""
-    model = cobra_model(CobraParameters(gravity=0.0, tau_max=1e-12), with_box=False)
-    q, qd0 = random_state(model, np.random.default_rng(7), scale=1.0)
-    q[2] = 100.0  # far above the ground
-    com = ChainModel(model)
-
-    def centre(q):
-        terms = com.terms(q, np.zeros(model.nv))
-        return com.mass @ terms.com / com.mass.sum()
-
-    c0, v_c = centre(q), spatial_momentum(model, q, qd0)[3:] / sum(model.mass)
+    model, q, qd0 = cobra_in_free_flight()
+    c0, v_c = centre_of_mass(model, q), spatial_momentum(model, q, qd0)[3:] / sum(model.mass)
     qd = qd0 - 0.5 * dt * forward_dynamics(model, q, qd0, np.zeros(model.nv)) if staggered else qd0.copy()
-    stepping = make_stepper("fast", model, StepSettings(dt=dt))
-    hold = lambda t: (np.zeros(11), np.zeros(11), np.zeros(11))
     n = int(round(T / dt))
-    for k in range(n):
-        res = stepping.step(q, qd, k * dt, hold)
-        q, qd = res.q, res.qd
-    return float(np.linalg.norm(centre(q) - (c0 + v_c * n * dt)))
+    q_end, _, _ = run(model, q, qd, n, StepSettings(dt=dt), reference=hold_joints)
+    return float(np.linalg.norm(centre_of_mass(model, q_end) - (c0 + v_c * n * dt)))
 
 
 def test_the_jointed_chain_in_free_flight_is_second_order_once_its_start_is_staggered():
