@@ -66,6 +66,10 @@ def add_parsers(sub) -> None:
                    help="push to the benchmark's 16 goals and 2 waypoint paths (cobra_ref/planning/benchmark.py) "
                         "instead of --goal; OUT is then the JSON of the rows (rewritten after each task)")
     p.add_argument("--figure", default=None, help="--benchmark: also draw every box path with its goal (PNG)")
+    p.add_argument("--travel-map", action="store_true",
+                   help="no push: measure where each primitive takes the robot alone, per cycle (every rolling "
+                        "shape at five tapers, sidewinding both ways; cobra_ref/planning/locomotion.py); OUT is the "
+                        "JSON of the rows, the table goes to stdout")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_push)
 
@@ -80,6 +84,8 @@ def cmd_push(args) -> int:
         return _replay(args)
     if args.benchmark:
         return _benchmark(args)
+    if args.travel_map:
+        return _travel_map(args)
     if args.goal is None:
         raise fail("give --goal X,Y (or --replay PLAN)")
     plan_path = args.plan or os.path.splitext(args.out)[0] + ".plan.json"
@@ -173,6 +179,20 @@ def _benchmark(args) -> int:
 
         plot_pushes(rows, args.figure)
     print(json.dumps(summary(rows)))
+    return 0
+
+
+def _travel_map(args) -> int:
+    """``push --travel-map``: the travel of every primitive (``planning.locomotion``), to OUT and stdout."""
+    from ..planning.locomotion import locomotion_map, markdown
+
+    check_out(args.out, "--out")
+    err = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+    with c_stdout_silenced():
+        with _executor(args.workers) as executor:
+            rows = locomotion_map(executor=executor, progress=err)
+    write_text_atomic(args.out, json.dumps([r.to_dict() for r in rows], indent=1) + "\n", "--out")
+    print(markdown(rows), end="")
     return 0
 
 
