@@ -28,16 +28,18 @@ def test_signed_angle_is_counter_clockwise_from_a_to_b(a, b, angle):
 
 
 @pytest.mark.slow
-def test_a_mirrored_primitive_travels_and_turns_as_the_reflection_of_its_own():
-    # J-mirror is J with every yaw joint negated: the robot's reflection in the vertical plane of
-    # its axis, which keeps the axis and reverses every angle from it; the distance is the same
-    J = travel(Primitive("J", 0.5, 1.0, taper=1.0), cycles=1)
-    mirror = travel(Primitive("J-mirror", 0.5, 1.0, taper=1.0), cycles=1)
-    assert J.distance > 0.1  # it does travel: ~0.4 m per cycle
-    assert mirror.distance == pytest.approx(J.distance, rel=1e-9)
-    assert mirror.angle == pytest.approx(-J.angle, abs=1e-6)
-    assert mirror.turn == pytest.approx(-J.turn, abs=1e-6)
-    assert abs(J.turn) > 1.0  # and the taper turns it, so the turn's sign is tested
+@pytest.mark.parametrize("family, taper", [("J", 1.0), ("sidewinding", 0.0)])
+def test_a_mirrored_primitive_travels_and_turns_as_the_reflection_of_its_own(family, taper):
+    # the mirror is the primitive with every yaw joint negated: the robot's reflection in the
+    # vertical plane of its axis, which keeps the axis and reverses every angle from it; the
+    # distance is the same
+    own = travel(Primitive(family, 0.5, 1.0, taper=taper), cycles=1)
+    mirror = travel(Primitive(family + "-mirror", 0.5, 1.0, taper=taper), cycles=1)
+    assert own.distance > 0.1  # it does travel: 0.4-0.6 m per cycle
+    assert mirror.distance == pytest.approx(own.distance, rel=1e-9)
+    assert mirror.angle == pytest.approx(-own.angle, abs=1e-6)
+    assert mirror.turn == pytest.approx(-own.turn, abs=1e-6)
+    assert abs(own.turn) > 1.0  # and it turns, so the turn's sign is tested
 
 
 def test_a_stop_has_no_travel_to_measure():
@@ -50,7 +52,7 @@ def test_the_travel_map_command_writes_the_rows_and_prints_the_table(tmp_path, m
     from cobra_ref.cli import main
     from cobra_ref.planning import locomotion
 
-    row = locomotion.Travel(Primitive("C", 0.5, 0.5), 0.3, -90.0, 1.5)
+    row = locomotion.Travel(Primitive("C", 0.5, 0.5), False, 0.3, -90.0, 1.5)
     monkeypatch.setattr(locomotion, "locomotion_map", lambda **kw: [row])
     out = tmp_path / "travel.json"
     assert main(["push", "--travel-map", "--out", str(out), "--workers", "1", "--quiet"]) == 0

@@ -59,6 +59,19 @@ def test_a_mirrored_shape_negates_the_yaw_joints_only():
     np.testing.assert_array_equal(a(0.0)[0][~YAW], b(0.0)[0][~YAW])
 
 
+@pytest.mark.parametrize("t", [0.1, 0.9, 1.7])
+def test_mirrored_sidewinding_negates_the_yaw_joints_of_sidewinding(t):
+    # q, qd and qdd along the whole motion, from the start's blend on
+    plans = []
+    for family in ("sidewinding", "sidewinding-mirror"):
+        plan = PlanReference(Primitive(family, 0.6, 0.5))
+        plan.extend(Primitive(family, 0.6, 0.5), 0.0)
+        plans.append(plan)
+    for own, mirror in zip(plans[0](t), plans[1](t)):
+        np.testing.assert_array_equal(own[YAW], -mirror[YAW])
+        np.testing.assert_array_equal(own[~YAW], mirror[~YAW])
+
+
 def test_the_taper_bends_one_end_more():
     # kappa_i = A (1 + b (s_i - 1/2)): with b = 0.5 the head bends 0.75 A, the tail 1.25 A
     q = PlanReference(Primitive("C", 0.4, taper=0.5))(0.0)[0]

@@ -15,12 +15,14 @@ frame of its body at their start::
 A lateral rolling robot travels across its axis (about -90 deg for the forward rolling of C); a
 taper b tilts that direction, a negative f reverses it, and the mirrored shapes reflect it: a
 primitive and its mirror travel at opposite angles and turn by opposite amounts, by symmetry
-(``tests/test_locomotion.py``).
+(``tests/test_locomotion.py``). With ``alternate``, the measured cycles run p and p with -f in
+turn (forwards, then backwards): sidewinding turns the same way in both directions, so that
+alternation turns the robot where it stands.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -30,7 +32,7 @@ from ..robots import cobra_model
 from ..simulate import Run
 from ..start import initial_state
 from ..step import StepSettings
-from .primitives import ROLLING, PlanReference, Primitive
+from .primitives import ROLLING, SIDEWINDING, PlanReference, Primitive
 
 WARM_CYCLES = 1  # cycles run before the measured ones (the start's blend, then a steady gait)
 TAPERS = (-1.0, -0.5, 0.0, 0.5, 1.0)  # the tapers of ``locomotion_map``
@@ -41,13 +43,14 @@ class Travel:
     """How a primitive moves the robot alone, per cycle (module docstring)."""
 
     primitive: Primitive
+    alternate: bool  # the cycles ran the primitive forwards and backwards in turn
     distance: float  # [m] the link centres' mean, per cycle
     angle: float  # [deg] of the travel from the body axis, counter-clockwise
     turn: float  # [deg] of the body axis, counter-clockwise
 
     def to_dict(self) -> dict:
-        return {"primitive": self.primitive.to_dict(), "distance": self.distance, "angle": self.angle,
-                "turn": self.turn}
+        return {"primitive": self.primitive.to_dict(), "alternate": self.alternate, "distance": self.distance,
+                "angle": self.angle, "turn": self.turn}
 
 
 def body_axis(points: np.ndarray) -> np.ndarray:
@@ -69,10 +72,12 @@ def signed_angle(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.degrees(np.arctan2(a[0] * b[1] - a[1] * b[0], a @ b)))
 
 
-def travel(primitive: Primitive, cycles: int = 2, settings: StepSettings = StepSettings()) -> Travel:
+def travel(primitive: Primitive, cycles: int = 2, settings: StepSettings = StepSettings(),
+           alternate: bool = False) -> Travel:
     """The robot alone running ``primitive``: its ``Travel`` per cycle over ``cycles`` cycles after
-    ``WARM_CYCLES`` (module docstring)."""
-    if primitive.family not in ROLLING + ("sidewinding",):
+    ``WARM_CYCLES`` (module docstring); with ``alternate``, those cycles run the primitive
+    forwards and backwards in turn."""
+    if primitive.family not in ROLLING + SIDEWINDING:
         raise ValueError(f"travel is measured for moving primitives, got {primitive.family!r}")
     model = cobra_model(with_box=False)
     plan = PlanReference(primitive)
@@ -81,28 +86,43 @@ def travel(primitive: Primitive, cycles: int = 2, settings: StepSettings = StepS
     run = Run(model, settings, *initial_state(model, plan, settings), "fast", (WARM_CYCLES + cycles) * n_cycle)
     run.advance(plan, WARM_CYCLES * n_cycle)
     before = link_centres(model, run.q)
-    run.advance(plan, cycles * n_cycle)
+    for k in range(cycles):
+        if alternate:  # odd cycles backwards, even ones forwards (the warm cycle ran forwards)
+            plan.extend(replace(primitive, frequency=primitive.frequency * (-1) ** (k + 1)), run.t)
+        run.advance(plan, n_cycle)
     after = link_centres(model, run.q)
     a0, a1 = body_axis(before), body_axis(after)
     moved = after.mean(axis=0) - before.mean(axis=0)
-    return Travel(primitive, float(np.linalg.norm(moved)) / cycles, signed_angle(a0, moved),
+    return Travel(primitive, alternate, float(np.linalg.norm(moved)) / cycles, signed_angle(a0, moved),
                   signed_angle(a0, a1) / cycles)
 
 
 def locomotion_map(amplitude: float = 0.5, frequency: float = 0.5, tapers=TAPERS, executor=None,
                    progress=None) -> list:
-    """[Travel] of every rolling family at each taper, then sidewinding forwards and backwards, all
-    at ``amplitude`` and ``frequency`` (``travel``), through ``executor`` (None: in this process);
-    ``progress(line)`` gets one line per primitive."""
-    jobs = [Primitive(f, amplitude, frequency, taper=b) for f in ROLLING for b in tapers]
-    jobs += [Primitive("sidewinding", amplitude, frequency), Primitive("sidewinding", amplitude, -frequency)]
+    """[Travel] of every rolling family at each taper, then both sidewinding families forwards,
+    backwards and alternating (four cycles), all at ``amplitude`` and ``frequency`` (``travel``),
+    through ``executor`` (None: in this process); ``progress(line)`` gets one line per primitive."""
+    jobs = [(Primitive(f, amplitude, frequency, taper=b), 2, False) for f in ROLLING for b in tapers]
+    jobs += [(Primitive(f, amplitude, sign * frequency), 2, False) for f in SIDEWINDING for sign in (1, -1)]
+    jobs += [(Primitive(f, amplitude, frequency), 4, True) for f in SIDEWINDING]
     rows = []
-    for row in (executor or SerialExecutor()).map(travel, jobs):
+    for row in (executor or SerialExecutor()).map(_travel_job, jobs):
         rows.append(row)
         if progress is not None:
-            progress(f"{len(rows)}/{len(jobs)} {row.primitive.family} b {row.primitive.taper:+.1f} "
-                     f"f {row.primitive.frequency:+g}: {100 * row.distance:.1f} cm per cycle at {row.angle:+.1f} deg")
+            progress(f"{len(rows)}/{len(jobs)} {_name(row)}: {100 * row.distance:.1f} cm per cycle at "
+                     f"{row.angle:+.1f} deg, turning {row.turn:+.2f} deg")
     return rows
+
+
+def _travel_job(job: tuple) -> Travel:
+    """``travel(primitive, cycles, alternate=...)`` of one ``locomotion_map`` job (picklable)."""
+    primitive, cycles, alternate = job
+    return travel(primitive, cycles, alternate=alternate)
+
+
+def _name(row: Travel) -> str:
+    p = row.primitive
+    return f"{p.family} b {p.taper:+.1f} f {p.frequency:+g}" + (" alternating" if row.alternate else "")
 
 
 def markdown(rows: list) -> str:
@@ -111,6 +131,6 @@ def markdown(rows: list) -> str:
              "| turn per cycle [deg] |", "|---|---|---|---|---|---|"]
     for r in rows:
         p = r.primitive
-        lines.append(f"| {p.family} | {p.taper:+.1f} | {p.frequency:+g} | {100 * r.distance:.1f} | {r.angle:+.1f} "
-                     f"| {r.turn:+.2f} |")
+        f = f"+-{abs(p.frequency):g}, alternating" if r.alternate else f"{p.frequency:+g}"
+        lines.append(f"| {p.family} | {p.taper:+.1f} | {f} | {100 * r.distance:.1f} | {r.angle:+.1f} | {r.turn:+.2f} |")
     return "\n".join(lines) + "\n"

@@ -10,8 +10,9 @@ function of the gait phase phi, f(phi) -> q (11,), and a phase rate omega = 2 pi
     sidewinding:  q_i = A sin(phi - Omega i + delta_i)          (``gaits.SidewindingGait``)
     stop:         the shape of the primitive before it, omega = 0
 
-with the bend profiles kappa of ``gaits.RollingGait`` (C, S, J) and their mirrors (S-mirror and
-J-mirror: yaw joints negated, the robot's reflection in its vertical plane), and the taper b in
+with the bend profiles kappa of ``gaits.RollingGait`` (C, S, J) and the mirrors (S-mirror,
+J-mirror and sidewinding-mirror: yaw joints negated, the robot's reflection in the vertical plane
+of its axis, which turns the other way: :mod:`cobra_ref.planning.locomotion`), and the taper b in
 [-1, 1]: one end of the body bends more than the other, a continuous steering parameter for
 lateral rolling (the analogue of conical sidewinding's taper; its effect is measured, not assumed).
 
@@ -38,7 +39,8 @@ from ..gaits import N_JOINTS, Q_MAX, S, YAW, RollingGait, SidewindingGait, rolli
 
 BLEND_TIME = 0.25  # [s] a switch's blend of shape and phase rate (the optimizer's ramp, RAMP_TIME)
 ROLLING = ("C", "S", "S-mirror", "J", "J-mirror")
-FAMILIES = ROLLING + ("sidewinding", "stop")
+SIDEWINDING = ("sidewinding", "sidewinding-mirror")
+FAMILIES = ROLLING + SIDEWINDING + ("stop",)
 
 
 class PrimitiveError(ValueError):
@@ -90,9 +92,12 @@ class _Shape:
             self.sidewinding = None
         else:
             self.kappa, self.sidewinding = None, SidewindingGait(amplitude_yaw=p.amplitude, amplitude_pitch=p.amplitude)
+        self.sign = np.where(YAW, -1.0, 1.0) if p.family == "sidewinding-mirror" else None
 
     def __call__(self, phi: float):
         f, df = rolling_shape(self.kappa, phi) if self.kappa is not None else self.sidewinding.shape(phi)
+        if self.sign is not None:  # sidewinding-mirror: the yaw joints negated
+            f, df = self.sign * f, self.sign * df
         return f, df, -f
 
 
