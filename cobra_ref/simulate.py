@@ -111,7 +111,7 @@ class Run:
         self.model, self.settings, self.t0 = model, settings, float(t0)
         self.q, self.qd = model.check_q(q0).copy(), model.check_qd(np.zeros(model.nv) if qd0 is None else qd0).copy()
         check_start(model, self.q)
-        self.log = _Log(model, capacity, settings.dt)
+        self.log = RunLog(model, capacity, settings.dt)
         self.log.add_state(self.t0, self.q, self.qd)
         self.k, self.wall_time, self._started = 0, 0.0, None
 
@@ -197,7 +197,7 @@ def check_start(model: Model, q) -> None:
             f"(allowed {MAX_START_PENETRATION * 1000:.1f} mm)")
 
 
-class _Log:
+class RunLog:
     """Preallocated per-step arrays and a growing contact log."""
 
     def __init__(self, model: Model, n_steps: int, dt: float):

@@ -35,14 +35,14 @@ def skew(w: np.ndarray) -> np.ndarray:
 
 
 def skew_rows(w: np.ndarray) -> np.ndarray:
-    """(k, 3, 3) skew matrices [w_i]x of the rows of w (k, 3): skew_rows(w)[i] @ v = w_i x v.
+    """(..., k, 3, 3) skew matrices [w_i]x of the rows of w (..., k, 3): skew_rows(w)[i] @ v = w_i x v.
 
     The batched :func:`skew` of the world-frame fast paths.
     """
-    out = np.zeros((len(w), 3, 3))
-    out[:, 0, 1], out[:, 0, 2] = -w[:, 2], w[:, 1]
-    out[:, 1, 0], out[:, 1, 2] = w[:, 2], -w[:, 0]
-    out[:, 2, 0], out[:, 2, 1] = -w[:, 1], w[:, 0]
+    out = np.zeros(w.shape + (3,))
+    out[..., 0, 1], out[..., 0, 2] = -w[..., 2], w[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = w[..., 2], -w[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -w[..., 1], w[..., 0]
     return out
 
 

@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..model import Model, ModelError
-from ..quaternion import quat_to_rot
+from ..quaternion import quat_to_rot, quat_to_rot_rows
 from ..spatial import skew, skew_rows
 
 _AXIS = {"Rx": 0, "Ry": 1, "Rz": 2}
@@ -128,105 +128,123 @@ class ChainModel:
         self.m_eye = self.mass[:, None, None] * np.eye(3)
 
     def terms(self, q, qd) -> ChainTerms:
-        """R, o, S, V, M and h at (q, qd): the same numbers as forward_kinematics, crba, bias_force."""
-        nb = self.nb
+        """R, o, S, V, M and h at (q, qd): the same numbers as forward_kinematics, crba, bias_force.
+
+        q (nq,) and qd (nv,); or a batch, (K, nq) and (K, nv), and every term gets a leading K
+        axis: each member's terms are the ones of its own call, bit for bit (``tests/test_batch.py``).
+        """
+        nb, lead = self.nb, np.shape(q)[:-1]
         if self.revolute_root:
             raise ValueError("fastdyn needs a free joint at each chain root")
         R, o = self._poses(q)
         S, c = self._motion_subspace(R, o, qd)
         # V_i = cumulative sum of S_k qd_k within each chain, read at each body's last dof
-        Sqd = (S * qd).T
-        V = self._chain_cumsum(Sqd).take(self.last_dof, axis=0)
+        Sqd = np.swapaxes(S * qd[..., None, :], -1, -2)
+        V = self._chain_cumsum(Sqd).take(self.last_dof, axis=-2)
         # c_k = V_body(k) x S_k qd_k for revolute dofs (zero for their own body: use V of the body);
         # the free joints' rows of c are already set
-        c[self._rev_v] = _motion_cross(V.take(self.rev_dof_body, axis=0), Sqd[self._rev_v])
-        A = self.a_0 + self._chain_cumsum(c).take(self.last_dof, axis=0)
-        com = o + np.einsum("bij,bj->bi", R, self.com)
+        c[..., self._rev_v, :] = _motion_cross(V.take(self.rev_dof_body, axis=-2), Sqd[..., self._rev_v, :])
+        A = self.a_0 + self._chain_cumsum(c).take(self.last_dof, axis=-2)
+        com = o + np.einsum("...bij,...bj->...bi", R, self.com)
         I_w = self._world_inertias(R, com)
         # f (nb, 6) and I_w (nb, 36) side by side: one subtree sum gives F and Ic
-        fI = np.empty((nb, 42))
-        np.add(np.einsum("bij,bj->bi", I_w, A), _force_cross(V, np.einsum("bij,bj->bi", I_w, V)), out=fI[:, :6])
-        fI[:, 6:] = I_w.reshape(nb, 36)
+        fI = np.empty(lead + (nb, 42))
+        np.add(np.einsum("...bij,...bj->...bi", I_w, A),
+               _force_cross(V, np.einsum("...bij,...bj->...bi", I_w, V)), out=fI[..., :6])
+        fI[..., 6:] = I_w.reshape(lead + (nb, 36))
         fI = self._subtree_sum(fI)
-        F, Ic = fI[:, :6], fI[:, 6:].reshape(nb, 6, 6)
-        h = np.einsum("ki,ki->i", S, F.take(self.dof_body, axis=0).T)
-        IcS = np.einsum("kij,jk->ik", Ic.take(self.dof_body, axis=0), S)  # (6, nv): Ic_body(l) S_l
+        F, Ic = fI[..., :6], fI[..., 6:].reshape(lead + (nb, 6, 6))
+        h = np.einsum("...ki,...ki->...i", S, np.swapaxes(F.take(self.dof_body, axis=-2), -1, -2))
+        IcS = np.einsum("...kij,...jk->...ik", Ic.take(self.dof_body, axis=-3), S)  # (6, nv): Ic_body(l) S_l
         # M[k, l] = S_k^T Ic_body(l) S_l for k <= l in one chain; the lower triangle by symmetry
-        M = np.where(self.upper_same_chain, S.T @ IcS, 0.0)
-        M = M + M.T
-        M.reshape(-1)[::len(M) + 1] *= 0.5  # the diagonal (M is contiguous: a view)
+        M = np.where(self.upper_same_chain, np.swapaxes(S, -1, -2) @ IcS, 0.0)
+        M = M + np.swapaxes(M, -1, -2)
+        M.reshape(lead + (-1,))[..., ::self.nv + 1] *= 0.5  # the diagonal (M is contiguous: a view)
         return ChainTerms(R, o, S, V, M, h, com)
 
     def _poses(self, q):
         """Body orientations and origins; joint rotations batched, the chain product in a loop."""
-        theta = q[self._rev_q]
-        c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+        lead = np.shape(q)[:-1]
+        theta = q[..., self._rev_q]
+        c, s = np.cos(theta)[..., None], np.sin(theta)[..., None]
         # R_rel = R_tree Rot_axis(theta): rotate columns j, k of R_tree in their plane
-        R_rel = self.tree_rot_rev.copy()
-        R_rel.put(self.rel_flat, c * self.rel_a + s * self.rel_b)
-        R = np.empty((self.nb, 3, 3))
+        R_rel = _copies(self.tree_rot_rev, lead)
+        if lead:
+            R_rel.reshape(lead + (-1,))[..., self.rel_flat] = c * self.rel_a + s * self.rel_b
+        else:
+            R_rel.put(self.rel_flat, c * self.rel_a + s * self.rel_b)
+        R = np.empty(lead + (self.nb, 3, 3))
         for i, start, n in self.pose_plan:
             if n < 0:
-                R[i] = quat_to_rot(q[start + 3:start + 7])
-            else:
+                R[..., i, :, :] = quat_to_rot(q[start + 3:start + 7]) if not lead else quat_to_rot_rows(
+                    q[..., start + 3:start + 7])
+            elif not lead:
                 # R_parent @ R_rel: np.dot makes the same BLAS call (dgemm) as matmul, with less overhead
                 np.dot(R[i - 1], R_rel[n], out=R[i])
+            else:
+                np.matmul(R[..., i - 1, :, :], R_rel[..., n, :, :], out=R[..., i, :, :])
         # o_i = o_parent + R_parent tree_pos_i: a cumulative sum along each chain from its root
         # (free joint) position; the free joints' rows of tree_pos are replaced by those positions
-        d = np.empty((self.nb, 3))
-        d[self._rev_body] = np.einsum("bij,bj->bi", R[self._rev_parent], self.tree_pos_rev)
-        d[self.free_body] = q.take(self.free_pos)
-        o = np.add.accumulate(d, axis=0)  # np.cumsum
+        d = np.empty(lead + (self.nb, 3))
+        d[..., self._rev_body, :] = np.einsum("...bij,...bj->...bi", R[..., self._rev_parent, :, :], self.tree_pos_rev)
+        d[..., self.free_body, :] = q.take(self.free_pos, axis=-1)
+        o = np.add.accumulate(d, axis=-2)  # np.cumsum
         for i in self.chain_starts:
-            o[i:] -= o[i - 1]
+            o[..., i:, :] -= o[..., i - 1:i, :]
         return R, o
 
     def _motion_subspace(self, R, o, qd):
         """World motion subspace S (6, nv), and c (nv, 6) with the free joints' velocity-product
-        terms in their rows (the revolute rows are left for ``terms``)."""
-        S = self.S_template.copy()
+        terms in their rows (the revolute rows are left for ``terms``); a batch leads with K."""
+        lead = R.shape[:-3]
+        S = _copies(self.S_template, lead)
         # revolute columns [z; o x z], read from R and o by flat index
-        S[:3, self._rev_v] = R.take(self.axis_flat).T
-        S[3:, self._rev_v] = (o.take(self.o_flat_1) * R.take(self.axis_flat_2)
-                              - o.take(self.o_flat_2) * R.take(self.axis_flat_1)).T
-        c = np.zeros((self.nv, 6))
-        R_free = R.take(self.free_body, axis=0)
-        oxR = skew_rows(o.take(self.free_body, axis=0)) @ R_free
+        R_flat, o_flat = R.reshape(lead + (-1,)), o.reshape(lead + (-1,))
+        S[..., :3, self._rev_v] = np.swapaxes(R_flat.take(self.axis_flat, axis=-1), -1, -2)
+        S[..., 3:, self._rev_v] = np.swapaxes(o_flat.take(self.o_flat_1, axis=-1) * R_flat.take(self.axis_flat_2, axis=-1)
+                                              - o_flat.take(self.o_flat_2, axis=-1) * R_flat.take(self.axis_flat_1, axis=-1),
+                                              -1, -2)
+        c = np.zeros(lead + (self.nv, 6))
+        R_free = R.take(self.free_body, axis=-3)
+        oxR = skew_rows(o.take(self.free_body, axis=-2)) @ R_free
         for n, (i, _, v) in enumerate(self.free):
-            S[:3, v + 3:v + 6] = R_free[n]
-            S[3:, v + 3:v + 6] = oxR[n]
+            S[..., :3, v + 3:v + 6] = R_free[..., n, :, :]
+            S[..., 3:, v + 3:v + 6] = oxR[..., n, :, :]
             # the free joint's velocity-product term in world coordinates: [0; -w_world x v_world]
-            w0, w1, w2 = np.dot(R_free[n], qd[v + 3:v + 6]).tolist()  # R w_body (dgemv, as matmul)
-            u0, u1, u2 = qd[v:v + 3].tolist()
-            c[v + 5, 3:] = (w2 * u1 - w1 * u2, w0 * u2 - w2 * u0, w1 * u0 - w0 * u1)
+            if not lead:
+                w0, w1, w2 = np.dot(R_free[n], qd[v + 3:v + 6]).tolist()  # R w_body (dgemv, as matmul)
+                u0, u1, u2 = qd[v:v + 3].tolist()
+            else:
+                w0, w1, w2 = np.matmul(R_free[..., n, :, :], qd[..., v + 3:v + 6, None])[..., 0].T
+                u0, u1, u2 = qd[..., v:v + 3].T
+            c[..., v + 5, 3], c[..., v + 5, 4], c[..., v + 5, 5] = w2 * u1 - w1 * u2, w0 * u2 - w2 * u0, w1 * u0 - w0 * u1
         return S, c
 
     def _chain_cumsum(self, x):
         """Cumulative sum over dofs (rows of x), restarting at each chain's first dof."""
-        out = np.add.accumulate(x, axis=0)  # np.cumsum
+        out = np.add.accumulate(x, axis=-2)  # np.cumsum
         for start in self.chain_start_dofs:
-            out[start:] -= out[start - 1]
+            out[..., start:, :] -= out[..., start - 1:start, :]
         return out
 
     def _subtree_sum(self, x):
         """Sum over each body's descendants (rows = bodies), chains in reverse order."""
-        out = np.add.accumulate(x[::-1], axis=0)[::-1]  # np.cumsum
+        out = np.add.accumulate(x[..., ::-1, :], axis=-2)[..., ::-1, :]  # np.cumsum
         for i in self.chain_starts:
-            out[:i] -= out[i]
+            out[..., :i, :] -= out[..., i:i + 1, :]
         return out
 
     def _world_inertias(self, R, c):
         """Spatial inertias in world coordinates at the origin, [[Ic + m C C^T, m C], [m C^T, m 1]]
         with C = [c]x for the world centres of mass c (nb, 3)."""
-        nb = len(R)
-        Ic = R @ self.I_com @ R.transpose(0, 2, 1)
+        Ic = R @ self.I_com @ np.swapaxes(R, -1, -2)
         C = skew_rows(c)
         mC = self.mass[:, None, None] * C
-        I_w = np.empty((nb, 6, 6))
-        np.add(Ic, mC @ C.transpose(0, 2, 1), out=I_w[:, :3, :3])
-        I_w[:, :3, 3:] = mC
-        I_w[:, 3:, :3] = mC.transpose(0, 2, 1)
-        I_w[:, 3:, 3:] = self.m_eye
+        I_w = np.empty(R.shape[:-2] + (6, 6))
+        np.add(Ic, mC @ np.swapaxes(C, -1, -2), out=I_w[..., :3, :3])
+        I_w[..., :3, 3:] = mC
+        I_w[..., 3:, :3] = np.swapaxes(mC, -1, -2)
+        I_w[..., 3:, 3:] = self.m_eye
         return I_w
 
     def point_jacobian(self, terms: ChainTerms, body: int, x: np.ndarray) -> np.ndarray:
@@ -251,26 +269,31 @@ _FORCE_CROSS = (np.array([[1, 2, 0, 4, 5, 3, 1, 2, 0], [2, 0, 1, 5, 3, 4, 2, 0, 
 
 
 def _cross_products(v, m, columns):
-    """(n, 9): three row-wise 3-D cross products of parts of v and m (n, 6), columns as above."""
+    """(..., n, 9): three row-wise 3-D cross products of parts of v and m (..., n, 6), columns as above."""
     a, b = columns  # (2, 9) each: a1 b1 in row 0, a2 b2 in row 1
-    p = v.take(a, axis=1) * m.take(b, axis=1)
-    return p[:, 0] - p[:, 1]
+    p = v.take(a, axis=-1) * m.take(b, axis=-1)
+    return p[..., 0, :] - p[..., 1, :]
 
 
 def _motion_cross(v, m):
     """Row-wise v x m for motion vectors ([RBDA] eq. 2.31), arrays (n, 6):
     [w x m_ang ; w x m_lin + v_O x m_ang] (a view of columns 0:6 of the three products)."""
     x = _cross_products(v, m, _MOTION_CROSS)
-    np.add(x[:, 3:6], x[:, 6:], out=x[:, 3:6])
-    return x[:, :6]
+    np.add(x[..., 3:6], x[..., 6:], out=x[..., 3:6])
+    return x[..., :6]
 
 
 def _force_cross(v, f):
     """Row-wise v x* f for force vectors ([RBDA] eq. 2.32), arrays (n, 6):
     [w x f_ang + v_O x f_lin ; w x f_lin] (a view of columns 3:9 of the three products)."""
     x = _cross_products(v, f, _FORCE_CROSS)
-    np.add(x[:, :3], x[:, 3:6], out=x[:, 3:6])
-    return x[:, 3:]
+    np.add(x[..., :3], x[..., 3:6], out=x[..., 3:6])
+    return x[..., 3:]
+
+
+def _copies(a: np.ndarray, lead: tuple) -> np.ndarray:
+    """A new array of ``lead`` copies of a (a itself copied when ``lead`` is empty)."""
+    return np.broadcast_to(a, lead + a.shape).copy() if lead else a.copy()
 
 
 def _index(idx):

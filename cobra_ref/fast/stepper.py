@@ -76,14 +76,20 @@ class FastStepper:
             return last[2]
         return _reference(reference, t)[:2]
 
-    def step(self, q: np.ndarray, qd: np.ndarray, t: float, reference, tau_ext=None) -> StepResult:
-        """One step from (q, qd) at time t: :func:`cobra_ref.step.step`, faster (module docstring)."""
+    def step(self, q: np.ndarray, qd: np.ndarray, t: float, reference, tau_ext=None, terms=None,
+             contacts=None) -> StepResult:
+        """One step from (q, qd) at time t: :func:`cobra_ref.step.step`, faster (module docstring).
+
+        ``terms``: this step's chain terms at (q, ``step.midpoint_velocity(qd, self.memory)``), and
+        ``contacts``: its (Contacts, J_c), if they were computed already (the batched engine,
+        :mod:`cobra_ref.fast.batch`)."""
         s, model, F, P = self.settings, self.model, self.free, self.prescribed
         dt, servo = s.dt, s.joint_servo
         clock = [time.perf_counter()]
         tau_ext = np.zeros(self.chain.nv) if tau_ext is None else np.asarray(tau_ext, dtype=float)
         # Steps 1-3: eq. (1) with h at the midpoint velocity, the joints, qd_free over the free coordinates
-        terms = self.chain.terms(q, midpoint_velocity(qd, self.memory))
+        if terms is None:
+            terms = self.chain.terms(q, midpoint_velocity(qd, self.memory))
         M, h = terms.M, terms.h
         qd_next = qd.copy()
         q_ref, qd_ref, _ = _reference(reference, t + dt)  # the joints' reference at the end of the step
@@ -96,8 +102,10 @@ class FastStepper:
         qd_next[F] = qd[F] + _potrs(L, rhs, lower=1)[0]
         clock.append(time.perf_counter())
         # Steps 4-5: contacts, J_c, the rows J over F, G = B^T B with B = L^-1 J_F^T
-        contacts = find_contacts(model, terms, s.margin)
-        J_c = contact_jacobian(self.chain, terms, contacts)
+        if contacts is None:
+            contacts = find_contacts(model, terms, s.margin)
+            contacts = (contacts, contact_jacobian(self.chain, terms, contacts))
+        contacts, J_c = contacts
         J = np.concatenate([J_c, self.servo_J])
         B = _trtrs(L, J[:, F].T, lower=1)[0]
         Minv_JT = _trtrs(L, B, lower=1, trans=1)[0]

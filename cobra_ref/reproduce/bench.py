@@ -12,6 +12,10 @@ settled start, and reports:
 * ``qp_solves_per_step`` and ``fixed_point_iterates_per_step``;
 * ``reference_us_per_step`` -- the readable reference step (:func:`cobra_ref.step.step`) over
   the first ``REFERENCE_STEPS`` steps of the same run (it is for reading, not for speed);
+* ``batched_us_per_member_step`` -- {K: wall time per member per step [us]} of the batched
+  engine (:mod:`cobra_ref.batch`) advancing K copies of the same start and reference for
+  ``BATCH_STEPS`` steps, K in ``BATCH_SIZES``; ``batched_ratio_same_dt``: each over MuJoCo's time per
+  step at our dt;
 * ``mujoco`` -- MuJoCo on the exported MJCF of the same model, its position actuators tracking
   the same reference from the same start over the same simulated time, at three timesteps:
 
@@ -45,6 +49,8 @@ from ..step import StepSettings
 from ..fast.stepper import PHASES
 
 REFERENCE_STEPS = 100
+BATCH_SIZES = (1, 4, 16, 64)  # the batched engine's sizes K that are timed
+BATCH_STEPS = 200  # the steps each batch takes
 TENTH_MS = 1e-4  # [s] MuJoCo's second timed timestep (module docstring)
 
 
@@ -67,6 +73,8 @@ def run_bench(duration: float = 2.0, dt: float = DEFAULT_DT, with_mujoco: bool =
         "fixed_point_iterates_per_step": round(float(np.mean(traj.steps["fp_iter"])), 3),
         "mean_contacts": round(float(np.mean(traj.steps["n_contacts"])), 2),
         "reference_us_per_step": round(short.wall_time / len(short.tau) * 1e6, 1),
+        "batched_us_per_member_step": batched_us(model, reference, settings, q0, qd0),
+        "batched_ratio_same_dt": None,
         "mujoco": None,
         "mujoco_us_per_step": None,
         "ratio_vs_mujoco": None,
@@ -75,9 +83,25 @@ def run_bench(duration: float = 2.0, dt: float = DEFAULT_DT, with_mujoco: bool =
     if with_mujoco:
         record["mujoco"] = mujoco_side_by_side(model, reference, q0, n, dt, record["us_per_step"])
         if record["mujoco"] is not None:
+            same = record["mujoco"]["same_dt"]["us_per_step"]
+            record["batched_ratio_same_dt"] = {K: round(us / same, 1)
+                                               for K, us in record["batched_us_per_member_step"].items()}
             accurate = record["mujoco"]["accurate"]
             record["mujoco_us_per_step"], record["ratio_vs_mujoco"] = accurate["us_per_step"], accurate["ratio"]
     return record
+
+
+def batched_us(model, reference, settings, q0, qd0, sizes=BATCH_SIZES, n_steps: int = BATCH_STEPS) -> dict:
+    """{K: wall time [us] per member per step} of ``fast.batch.BatchRun`` with K copies of the start
+    (q0, qd0) and ``reference``, ``n_steps`` steps each (module docstring)."""
+    from ..batch import BatchRun
+
+    out = {}
+    for K in sizes:
+        run = BatchRun(model, settings, [(q0, qd0)] * K, n_steps)
+        run.advance([reference] * K, n_steps)
+        out[K] = round(run.wall_time / (K * n_steps) * 1e6, 1)
+    return out
 
 
 def mujoco_side_by_side(model, reference, q0, n_steps: int, dt: float, ours_us: float) -> dict | None:
@@ -140,6 +164,10 @@ def format_table(record: dict) -> str:
                  f"fixed-point iterates, {record['qp_solves_per_step']} OSQP solves per step)")
     lines.append(f"{'reference step (readable)':<28}{record['reference_us_per_step']:>10.1f} us/step "
                  f"(first {REFERENCE_STEPS} steps)")
+    ratios = record["batched_ratio_same_dt"] or {}
+    for K, us in record["batched_us_per_member_step"].items():
+        ratio = f"   = {ratios[K]} x MuJoCo at the same dt" if K in ratios else ""
+        lines.append(f"{f'batched, K = {K}':<28}{us:>10.1f} us per member-step ({BATCH_STEPS} steps){ratio}")
     if record["mujoco"] is not None:
         for name, what in (("same_dt", "the per-step comparison"), ("tenth_ms", "at 0.1 ms"),
                            ("accurate", "accuracy-matched")):

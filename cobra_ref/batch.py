@@ -1,0 +1,106 @@
+"""Rollouts in lockstep: K runs of one model advanced by one call per step, the batched rollout engine.
+
+``BatchRun`` is :class:`cobra_ref.simulate.Run` for K members (each its own start, joint reference,
+warm start and log) stepped together by :class:`cobra_ref.fast.batch.BatchStepper`;
+``simulate_batch`` is :func:`cobra_ref.simulate.simulate` for a batch. Each member's trajectory is
+its single run's, bit for bit (``tests/test_batch.py``). A member whose step fails leaves the batch
+with what it computed, its trajectory's ``error`` saying why; the others go on.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .fast.batch import BatchStepper
+from .infra import arguments
+from .infra.executors import one_blas_thread
+from .model import Model
+from .simulate import EXPECTED, RunLog, check_start, meta
+from .step import StepSettings
+
+
+class BatchRun:
+    """K runs of one model in lockstep (``simulate.Run`` for a batch): starts ``starts`` [(q0, qd0)],
+    logs of at most ``capacity`` steps each."""
+
+    def __init__(self, model: Model, settings: StepSettings, starts, capacity: int, t0: float = 0.0):
+        self.model, self.settings, self.t0 = model, settings, float(t0)
+        starts = list(starts)
+        self.stepping = BatchStepper(model, settings, len(starts))
+        self.Q = np.array([model.check_q(q0) for q0, _ in starts], dtype=float)
+        self.QD = np.array([model.check_qd(np.zeros(model.nv) if qd0 is None else qd0) for _, qd0 in starts],
+                           dtype=float)
+        for q in self.Q:
+            check_start(model, q)
+        self.logs = [RunLog(model, capacity, settings.dt) for _ in starts]
+        for log, q, qd in zip(self.logs, self.Q, self.QD):
+            log.add_state(self.t0, q, qd)
+        self.errors = [""] * len(starts)  # why each member left the batch ("": it did not)
+        self.k, self.wall_time = 0, 0.0
+
+    @property
+    def size(self) -> int:
+        return len(self.logs)
+
+    def advance(self, references, n_steps: int) -> None:
+        """``n_steps`` more steps, member k following ``references[k]``; a member whose step fails
+        (or leaves a non-finite state) keeps its log up to that step and its error."""
+        if len(references) != self.size:
+            raise ValueError(f"a batch of {self.size} needs {self.size} references, got {len(references)}")
+        if self.k + n_steps > len(self.logs[0].tau):
+            raise ValueError(f"the runs hold {len(self.logs[0].tau)} steps; {self.k} taken, {n_steps} more asked")
+        dt = self.settings.dt
+        start = time.perf_counter()
+        try:
+            with one_blas_thread():
+                for _ in range(n_steps):
+                    active = [k for k, e in enumerate(self.errors) if not e]
+                    if not active:
+                        break
+                    t = self.t0 + self.k * dt
+                    for k, res in zip(active, self.stepping.step(self.Q, self.QD, t, references, active)):
+                        self._record(k, res, t)
+                    self.k += 1
+        except KeyboardInterrupt as exc:  # Ctrl-C: every member keeps what it computed
+            self.wall_time += time.perf_counter() - start
+            start = None
+            where = f"step {self.k} (t = {self.t0 + self.k * dt:.4f} s): interrupted"
+            self.errors = [e or where for e in self.errors]
+            exc.trajectories = self.finish()
+            raise
+        finally:
+            if start is not None:
+                self.wall_time += time.perf_counter() - start
+
+    def _record(self, k: int, res, t: float) -> None:
+        """Member k's result of the step at t: logged, or its error (named as ``simulate.Run`` names it)."""
+        where = f"step {self.k} (t = {t:.4f} s)"
+        if isinstance(res, BaseException):
+            what = str(res) if isinstance(res, EXPECTED) else f"{type(res).__name__}: {res}"
+            self.errors[k] = f"{where}: {what}"
+        elif not math.isfinite(res.q.sum() + res.qd.sum()):
+            self.errors[k] = f"{where}: non-finite state"
+        else:
+            self.Q[k], self.QD[k] = res.q, res.qd
+            self.logs[k].add_step(self.k, res)
+            self.logs[k].add_state(t + self.settings.dt, res.q, res.qd)
+
+    def finish(self) -> list:
+        """Every member's Trajectory so far (its ``error`` set if it left the batch); each records
+        its share of the batch's wall time."""
+        share = self.wall_time / self.size
+        return [log.finish(share, error, meta(self.model, self.settings, member))
+                for log, error, member in zip(self.logs, self.errors, self.stepping.members)]
+
+
+def simulate_batch(model: Model, references, duration: float, settings: StepSettings, starts) -> list:
+    """``simulate.simulate`` for a batch: member k from ``starts[k]`` = (q0, qd0) following
+    ``references[k]`` for ``duration`` seconds; a Trajectory per member, a failed member's with its
+    ``error`` set (the others run to the end)."""
+    n_steps = arguments.duration_steps(duration, settings.dt)
+    run = BatchRun(model, settings, starts, n_steps)
+    run.advance(references, n_steps)
+    return run.finish()

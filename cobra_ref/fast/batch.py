@@ -1,0 +1,61 @@
+"""The batched step: K members of one model advanced by one call per step.
+
+For performance: K members, each with its own state, joint reference and warm start, share one
+model and one step size and are advanced together, one ``BatchStepper.step`` per step for all of
+them (:mod:`cobra_ref.batch` runs and records them). Batched so far: the chain terms (poses,
+motion subspaces, M and h) of every member in one call of
+:meth:`cobra_ref.fast.chain.ChainModel.terms` with a leading K axis, and the contacts and their
+Jacobians (:func:`cobra_ref.fast.contacts.find_contacts_batch`, ``contact_jacobian_batch``). The
+rest of each member's step (its free velocity, least-action problem and solve, and result) is its
+own :class:`cobra_ref.fast.stepper.FastStepper`'s, given those. Each member takes its single run's
+steps bit for bit (``tests/test_batch.py``). A member whose step fails gets its exception back in
+place of a result; the others go on.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..model import Model
+from ..step import StepSettings, midpoint_velocity
+from .chain import ChainTerms
+from .contacts import contact_jacobian_batch, find_contacts_batch
+from .stepper import FastStepper
+
+
+class BatchStepper:
+    """``size`` fast steppers (``members``) stepped in lockstep (module docstring)."""
+
+    name = "batch"
+
+    def __init__(self, model: Model, settings: StepSettings, size: int):
+        if not (isinstance(size, int) and size >= 1):
+            raise ValueError(f"a batch has at least one member, got size = {size!r}")
+        self.model, self.settings = model, settings
+        self.members = [FastStepper(model, settings) for _ in range(size)]
+        self.chain = self.members[0].chain
+        self.batched_seconds = 0.0  # the batched parts' time, summed
+
+    def step(self, Q: np.ndarray, QD: np.ndarray, t: float, references, active) -> list:
+        """One step at time t of the members ``active`` (indices), from their rows of Q (K, nq) and
+        QD (K, nv), each following its ``references[k]``: a ``step.StepResult`` per active member,
+        or the exception its step raised (that member's step is then not taken)."""
+        start = time.perf_counter()
+        W = np.stack([midpoint_velocity(QD[k], self.members[k].memory) for k in active])
+        terms = self.chain.terms(Q[active], W)
+        contacts = find_contacts_batch(self.model, terms.R, terms.o, self.settings.margin)
+        J_c = contact_jacobian_batch(self.chain, terms.S, contacts)
+        self.batched_seconds += time.perf_counter() - start
+        out = []
+        for j, k in enumerate(active):
+            try:
+                own = ChainTerms(*(part[j] for part in terms))
+                out.append(self.members[k].step(Q[k], QD[k], t, references[k], terms=own,
+                                                contacts=(contacts[j], J_c[j])))
+            except KeyboardInterrupt:
+                raise
+            except Exception as exc:  # this member fails; the others go on
+                out.append(exc)
+        return out

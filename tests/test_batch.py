@@ -1,0 +1,89 @@
+"""The batched rollout engine: a batch of runs is its members' single runs, bit for bit."""
+
+import numpy as np
+import pytest
+
+from cobra_ref.batch import BatchRun, simulate_batch
+from cobra_ref.fast.chain import ChainModel
+from cobra_ref.gaits import gait
+from cobra_ref.robots import cobra_model
+from cobra_ref.simulate import simulate
+from cobra_ref.start import initial_state
+from cobra_ref.step import StepSettings
+
+SETTINGS = StepSettings(dt=1e-3)
+
+
+def random_states(model, k, seed=0):
+    """k configurations and velocities: random joint angles and rates, unit quaternions, bases off the ground."""
+    rng = np.random.default_rng(seed)
+    Q, QD = np.zeros((k, model.nq)), rng.normal(size=(k, model.nv))
+    for i in range(model.nb):
+        start = model.q_idx[i].start
+        if model.joint_type[i] == "free":
+            Q[:, start:start + 3] = rng.normal(size=(k, 3)) + [0.0, 0.0, 1.0]
+            quat = rng.normal(size=(k, 4))
+            Q[:, start + 3:start + 7] = quat / np.linalg.norm(quat, axis=1, keepdims=True)
+        else:
+            Q[:, start] = rng.uniform(-1.0, 1.0, size=k)
+    return Q, QD
+
+
+def test_the_chain_terms_of_a_batch_are_each_members_own():
+    model = cobra_model()
+    chain = ChainModel(model)
+    Q, QD = random_states(model, 5)
+    batch = chain.terms(Q, QD)
+    for k in range(5):
+        own = chain.terms(Q[k], QD[k])
+        for name, part in zip(own._fields, own):
+            np.testing.assert_array_equal(getattr(batch, name)[k], part, err_msg=name)
+
+
+def _members():
+    """Three members of one model: C, J and sidewinding, each from its own settled start."""
+    model = cobra_model()
+    references = [gait(name) for name in ("C", "J", "sidewinding")]
+    return model, references, [initial_state(model, ref, SETTINGS) for ref in references]
+
+
+def _same_run(a, b):
+    for name in ("q", "qd", "tau", "box_pose"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    for key in a.steps:
+        np.testing.assert_array_equal(a.steps[key], b.steps[key], err_msg=key)
+    for key in a.contacts:
+        np.testing.assert_array_equal(a.contacts[key], b.contacts[key], err_msg=key)
+
+
+@pytest.mark.slow
+def test_every_member_of_a_batch_takes_its_single_runs_steps_bit_for_bit():
+    model, references, starts = _members()
+    batch = simulate_batch(model, references, 0.3, SETTINGS, starts)
+    for traj, ref, (q0, qd0) in zip(batch, references, starts):
+        assert traj.error == ""
+        _same_run(traj, simulate(model, ref, 0.3, SETTINGS, q0, qd0))
+
+
+class _Broken:
+    """A reference that stops being finite after t_end (the member's step then fails)."""
+
+    def __init__(self, reference, t_end):
+        self.reference, self.t_end = reference, t_end
+
+    def __call__(self, t):
+        q, qd, qdd = self.reference(t)
+        return (q * np.nan, qd, qdd) if t > self.t_end else (q, qd, qdd)
+
+
+@pytest.mark.slow
+def test_a_failing_member_leaves_the_batch_and_the_others_go_on():
+    model, references, starts = _members()
+    references[1] = _Broken(references[1], 0.1)
+    run = BatchRun(model, SETTINGS, starts, 200)
+    run.advance(references, 200)
+    C, J, side = run.finish()
+    assert "not finite" in J.error and J.error.startswith("step 100 (t = 0.1000 s)")
+    assert len(J.tau) == 100  # the steps before the failure are kept
+    assert C.error == side.error == "" and len(C.tau) == len(side.tau) == 200
+    _same_run(side, simulate(model, references[2], 0.2, SETTINGS, *starts[2]))
