@@ -24,12 +24,16 @@ from .step import StepSettings
 
 class BatchRun:
     """K runs of one model in lockstep (``simulate.Run`` for a batch): starts ``starts`` [(q0, qd0)],
-    logs of at most ``capacity`` steps each."""
+    logs of at most ``capacity`` steps each; ``t0`` and ``memory`` (a stepper's ``memory``, every
+    member's) start them in the middle of another run, as ``simulate.Run``'s do."""
 
-    def __init__(self, model: Model, settings: StepSettings, starts, capacity: int, t0: float = 0.0):
+    def __init__(self, model: Model, settings: StepSettings, starts, capacity: int, t0: float = 0.0,
+                 memory: dict | None = None):
         self.model, self.settings, self.t0 = model, settings, float(t0)
         starts = list(starts)
         self.stepping = BatchStepper(model, settings, len(starts))
+        for member in self.stepping.members:
+            member.memory = memory
         self.Q = np.array([model.check_q(q0) for q0, _ in starts], dtype=float)
         self.QD = np.array([model.check_qd(np.zeros(model.nv) if qd0 is None else qd0) for _, qd0 in starts],
                            dtype=float)

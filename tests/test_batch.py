@@ -87,3 +87,20 @@ def test_a_failing_member_leaves_the_batch_and_the_others_go_on():
     assert len(J.tau) == 100  # the steps before the failure are kept
     assert C.error == side.error == "" and len(C.tau) == len(side.tau) == 200
     _same_run(side, simulate(model, references[2], 0.2, SETTINGS, *starts[2]))
+
+
+@pytest.mark.slow
+def test_a_batch_started_mid_run_continues_as_the_single_run_does():
+    # a planner's rollouts start from a plant's state, time and stepper memory
+    from cobra_ref.simulate import Run
+
+    model, references, starts = _members()
+    plant = Run(model, SETTINGS, *starts[0], "fast", 50)
+    plant.advance(references[0], 50)
+    single = Run(model, SETTINGS, plant.q, plant.qd, "fast", 100, t0=plant.t, memory=plant.stepping.memory)
+    single.advance(references[0], 100)
+    batch = BatchRun(model, SETTINGS, [(plant.q, plant.qd)] * 2, 100, t0=plant.t, memory=plant.stepping.memory)
+    batch.advance([references[0], references[1]], 100)
+    own, other = batch.finish()
+    _same_run(own, single.finish())
+    assert own.t[0] == pytest.approx(0.05) and not np.array_equal(own.q, other.q)

@@ -42,6 +42,22 @@ def test_each_period_applies_the_cheapest_candidate(pushed):
     assert pushed.plan.starts == [0.0, pytest.approx(0.1)]
 
 
+def test_a_replans_candidates_cost_the_same_in_a_batch_as_one_by_one():
+    # candidate_costs advances the candidates together (cobra_ref.batch); each is its own rollout
+    from cobra_ref.planning.primitives import PlanReference
+    from cobra_ref.planning.receding import Rollout, candidate_costs
+    from cobra_ref.robots import cobra_model
+    from cobra_ref.start import initial_state
+
+    plan = PlanReference(TINY.start)
+    q0, qd0 = initial_state(cobra_model(TINY.cobra), plan, TINY.settings)
+    pairs = [candidates(TINY.start, np.random.default_rng(0), 1)[i] for i in (0, 2, 4, 5)]  # C, back, stop, S
+    jobs = [Rollout(plan.to_dict(), pair, 0.0, q0, qd0, None, (0.3, 0.0), TINY) for pair in pairs]
+    batched = candidate_costs(jobs)
+    assert [r["cost"] for r in batched] == [candidate_cost(job)["cost"] for job in jobs]
+    assert len({r["cost"] for r in batched}) == 4  # four different first periods, four different rollouts
+
+
 def test_the_plan_replays_to_the_executed_run_bit_for_bit(pushed):
     again = replay(pushed.plan.to_dict(), TINY)
     for name in ("q", "qd", "tau", "box_pose"):

@@ -12,8 +12,9 @@ stepper's memory and the plan so far):
    the last choice's amplitude and frequency, and ``samples`` copies of the last choice with
    Gaussian noise on amplitude, frequency and taper (predictive sampling; the noise from a
    generator seeded by ``seed`` and the period's index);
-2. each candidate is rolled out over the horizon from that state (through the executor), and
-   costs, in metres (``candidate_cost``)::
+2. each candidate is rolled out over the horizon from that state (through the executor, the
+   candidates in batches advanced together: ``replan_batched``), and costs, in metres
+   (``candidate_cost``)::
 
        J = d(t + H T_p) + d(t + T_p) / 2 + w_a a(t + H T_p) + w_e E + w_I I + w_tau P_tau
 
@@ -46,13 +47,15 @@ from ..params import CobraParameters
 from ..provenance import code_version
 from ..kinematics import forward_kinematics
 from ..robots import cobra_model
+from ..batch import BatchRun
 from ..simulate import Run
 from ..start import initial_state
-from ..step import SimulationError, StepSettings
+from ..step import StepSettings
 from .cost import effort_term, excess_term, impact_term, robot_weight
 from .primitives import ROLLING, PlanReference, Primitive
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
+ROLLOUT_BATCHES = 2  # a re-plan's candidates go to the executor as this many batches (``replan_batched``)
 NEAR = 0.05  # [m] a stop for the whole horizon is a candidate only with the box this near its target
 PLANTS = ("cobra_ref", "mujoco")
 
@@ -149,18 +152,33 @@ class Rollout:
 def candidate_cost(job: Rollout) -> dict:
     """One candidate's rollout and its cost J (module docstring): {"cost", "distance", "box"}.
     What the executor runs (module level: picklable)."""
-    o = job.options
-    plan = PlanReference.from_dict(job.plan)
-    plan.extend(job.pair[0], job.t)
-    plan.extend(job.pair[1], job.t + o.period)
+    return candidate_costs([job])[0]
+
+
+def candidate_costs(jobs: list) -> list:
+    """``candidate_cost`` of each of ``jobs``, which start from one state (one re-plan's), their
+    rollouts advanced together as one batch (:mod:`cobra_ref.batch`: each the same steps, bit for
+    bit, as its own run). What the executor runs (module level: picklable)."""
+    o, first = jobs[0].options, jobs[0]
+    plans = []
+    for job in jobs:
+        plan = PlanReference.from_dict(job.plan)
+        plan.extend(job.pair[0], job.t)
+        plan.extend(job.pair[1], job.t + o.period)
+        plans.append(plan)
     model = cobra_model(o.cobra)
     n_period = int(round(o.period / o.settings.dt))
-    run = Run(model, o.settings, job.q, job.qd, "fast", n_period * o.horizon, t0=job.t, memory=job.memory)
-    try:
-        run.advance(plan, n_period * o.horizon)
-    except SimulationError as exc:
-        return {"cost": FAILED, "distance": None, "box": None, "error": str(exc)}
-    traj = run.finish()
+    run = BatchRun(model, o.settings, [(first.q, first.qd)] * len(jobs), n_period * o.horizon, t0=first.t,
+                   memory=first.memory)
+    run.advance(plans, n_period * o.horizon)
+    return [_rollout_cost(job, traj, model, n_period) for job, traj in zip(jobs, run.finish())]
+
+
+def _rollout_cost(job: Rollout, traj, model, n_period: int) -> dict:
+    """The cost J of one candidate's rollout ``traj`` (module docstring), or ``FAILED`` if it failed."""
+    o = job.options
+    if traj.error:
+        return {"cost": FAILED, "distance": None, "box": None, "error": traj.error}
     target = np.asarray(job.target)
     d_mid = float(np.linalg.norm(traj.box_pose[n_period, :2] - target))
     d_end = float(np.linalg.norm(traj.box_pose[-1, :2] - target))
@@ -226,7 +244,7 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
         for k in range(n_budget):
             t = run.t
             pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=distance() <= NEAR)
-            best, results = replan(_jobs(plan, run, pairs, targets[aim], o), candidate_cost, executor)
+            best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o), executor)
             last = pairs[best][0]
             moving = last if last.family != "stop" else moving
             plan.extend(last, t)
@@ -257,6 +275,16 @@ def replan(jobs: list, predict, executor=None) -> tuple[int, list]:
     candidate's rollout, through ``executor`` (``predict`` at module level: picklable), and the index
     of the cheapest (the first of equal costs). The plant then applies that candidate's first period."""
     results = list((executor or SerialExecutor()).map(predict, jobs))
+    return int(np.argmin([r["cost"] for r in results])), results
+
+
+def replan_batched(jobs: list, executor=None) -> tuple[int, list]:
+    """``replan`` with ``candidate_costs``: the candidates in ``ROLLOUT_BATCHES`` batches (one per
+    worker of a two-core machine), each batch one executor task; the same costs, bit for bit, as
+    one task per candidate."""
+    size = -(-len(jobs) // ROLLOUT_BATCHES)
+    batches = [jobs[i:i + size] for i in range(0, len(jobs), size)]
+    results = [r for batch in (executor or SerialExecutor()).map(candidate_costs, batches) for r in batch]
     return int(np.argmin([r["cost"] for r in results])), results
 
 
