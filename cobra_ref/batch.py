@@ -43,6 +43,7 @@ class BatchRun:
         for log, q, qd in zip(self.logs, self.Q, self.QD):
             log.add_state(self.t0, q, qd)
         self.errors = [""] * len(starts)  # why each member left the batch ("": it did not)
+        self.messages = [""] * len(starts)  # ... as simulate's SimulationError says it
         self.k, self.wall_time = 0, 0.0
 
     @property
@@ -85,8 +86,10 @@ class BatchRun:
         if isinstance(res, BaseException):
             what = str(res) if isinstance(res, EXPECTED) else f"{type(res).__name__}: {res}"
             self.errors[k] = f"{where}: {what}"
+            self.messages[k] = f"step failed at step {self.k}, t = {t:.4f} s: {what}"
         elif not math.isfinite(res.q.sum() + res.qd.sum()):
             self.errors[k] = f"{where}: non-finite state"
+            self.messages[k] = f"non-finite state at step {self.k}, t = {t:.4f} s"
         else:
             self.Q[k], self.QD[k] = res.q, res.qd
             self.logs[k].add_step(self.k, res)

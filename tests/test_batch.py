@@ -104,3 +104,20 @@ def test_a_batch_started_mid_run_continues_as_the_single_run_does():
     own, other = batch.finish()
     _same_run(own, single.finish())
     assert own.t[0] == pytest.approx(0.05) and not np.array_equal(own.q, other.q)
+
+
+@pytest.mark.slow
+def test_the_optimizers_rollouts_cost_the_same_in_a_batch_as_one_by_one():
+    # the search sends each worker its points as one batch (planning.cost.evaluate_batch)
+    from cobra_ref import planning as sh
+    from cobra_ref.planning.cost import evaluate, evaluate_batch
+
+    space = sh.DecisionSpace(names=("frequency",), bounds={"frequency": (0.5, 1.5)}, ramp_time=0.1)
+    problem = sh.make_problem("C", (0.05, -0.01), 0.3, None, space, box_gap=0.005)
+    xs = [np.array([0.6]), np.array([0.9]), np.array([1.2])]
+    for alone, together in zip([evaluate(problem, x) for x in xs], evaluate_batch(problem, xs)):
+        assert alone.keys() == together.keys()
+        for key in alone:
+            np.testing.assert_array_equal(np.asarray(together[key], dtype=object), np.asarray(alone[key], dtype=object),
+                                          err_msg=key)
+    assert len({e["cost"] for e in evaluate_batch(problem, xs)}) == 3

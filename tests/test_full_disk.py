@@ -23,6 +23,11 @@ from cobra_ref.infra.output import OutputError, write_text
 from cobra_ref.planning import search
 from cobra_ref.planning.results import load_result
 
+def one_by_one(evaluate):
+    """A made-up ``evaluate(problem, x)`` as the search's ``evaluate_batch(problem, xs)``."""
+    return lambda problem, xs: [evaluate(problem, x) for x in xs]
+
+
 NO_SPACE = os.strerror(errno.ENOSPC)
 PREVIOUS = "the previous content\n"
 
@@ -201,7 +206,7 @@ def test_each_command_on_a_full_disk_fails_in_one_line_and_keeps_the_previous_fi
     elsewhere.mkdir()
     target = disk / filename
     target.write_text(PREVIOUS)
-    monkeypatch.setattr(search, "evaluate", made_up_rollout)
+    monkeypatch.setattr(search, "evaluate_batch", one_by_one(made_up_rollout))
     monkeypatch.setattr(tempfile, "tempdir", str(elsewhere))  # where optimize keeps what OUT cannot take
     full_disk(disk)
     code, line, err = run_cli([a.format(disk=disk, run=run_npz) for a in argv], capsys)
@@ -240,7 +245,7 @@ def optimize_on(tmp_path, full_disk, capsys, monkeypatch, writes_left: int, fall
     disk, elsewhere = tmp_path / "disk", tmp_path / "elsewhere"
     disk.mkdir()
     elsewhere.mkdir()
-    monkeypatch.setattr(search, "evaluate", made_up_rollout)
+    monkeypatch.setattr(search, "evaluate_batch", one_by_one(made_up_rollout))
     monkeypatch.setattr(tempfile, "tempdir", str(elsewhere))
     full_disk(disk, writes_left)
     if fallback_full:
@@ -287,7 +292,7 @@ def test_when_the_fallback_cannot_be_written_either_the_error_says_what_the_chec
 
 
 def test_optimize_with_room_ends_with_the_result_and_no_checkpoint_mark(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(search, "evaluate", made_up_rollout)
+    monkeypatch.setattr(search, "evaluate_batch", one_by_one(made_up_rollout))
     target = tmp_path / "C.json"
     code, line, err = run_cli(OPTIMIZE + ["--out", str(target)], capsys)
     record = json.loads(target.read_text())
@@ -299,7 +304,7 @@ def test_the_optimizations_of_figures_reoptimize_keep_their_rollouts_the_same_wa
     from cobra_ref.planning import SerialExecutor, optimize_gait
     from cobra_ref.step import StepSettings
 
-    monkeypatch.setattr(search, "evaluate", made_up_rollout)
+    monkeypatch.setattr(search, "evaluate_batch", one_by_one(made_up_rollout))
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     target, lines = tmp_path / "optimized" / "C.json", []
     full_disk(target.parent, writes_left=1)

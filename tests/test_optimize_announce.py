@@ -12,6 +12,11 @@ from cobra_ref.planning.problem import Weights
 from cobra_ref.planning.search import SearchOptions, search_budget
 
 
+def one_by_one(evaluate):
+    """A made-up ``evaluate(problem, x)`` as the search's ``evaluate_batch(problem, xs)``."""
+    return lambda problem, xs: [evaluate(problem, x) for x in xs]
+
+
 def test_the_budget_of_a_search_counts_its_rollouts_and_its_waves():
     # compass search over n = 3: x0, then 2 polls of 2n = 6 points: 13 rollouts; on 2 workers a poll
     # is 3 waves, so 1 + 2 x 3 = 7 waves; on 1 worker 13
@@ -36,7 +41,7 @@ def slow_made_up(problem, x):
 
 
 def test_optimize_announces_both_searches_with_rollouts_and_an_estimated_time(problem, monkeypatch):
-    monkeypatch.setattr(search, "evaluate", slow_made_up)
+    monkeypatch.setattr(search, "evaluate_batch", one_by_one(slow_made_up))
     lines = []
     sh.optimize(problem, SearchOptions(maxiter=2), executor=sh.SerialExecutor(), progress=lines.append)
     text = "\n".join(lines)
@@ -53,7 +58,7 @@ def test_optimize_announces_both_searches_with_rollouts_and_an_estimated_time(pr
 
 
 def test_without_the_companion_one_search_is_announced(problem, monkeypatch):
-    monkeypatch.setattr(search, "evaluate", slow_made_up)
+    monkeypatch.setattr(search, "evaluate_batch", one_by_one(slow_made_up))
     lines = []
     sh.optimize(problem, SearchOptions(maxiter=1, companion=False), executor=sh.SerialExecutor(),
                 progress=lines.append)

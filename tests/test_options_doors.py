@@ -213,12 +213,10 @@ def test_a_replay_with_the_files_own_settings_compares_the_cost(here, inputs, ca
 # ---------------------------------------------------------------------- failures that name their input
 
 def test_an_optimization_whose_every_rollout_fails_exits_1_and_writes_nothing(here, capsys, monkeypatch):
-    from cobra_ref.step import SimulationError
+    def fails(problem, xs):  # every rollout of the batch fails at its start, as rollouts reports it
+        return [(None, "step failed at step 3, t = 0.0030 s: OSQPException: 4") for _ in xs]
 
-    def fails(problem, x, progress=None):
-        raise SimulationError("step failed at step 3, t = 0.0030 s: OSQPException: 4")
-
-    monkeypatch.setattr("cobra_ref.planning.cost.rollout", fails)
+    monkeypatch.setattr("cobra_ref.planning.cost.rollouts", fails)
     code, said = run_main(["optimize", "--gait", "C", "--duration", "0.01", "--goal", "0.003,0", "--maxiter", "0",
                            "--no-companion", "--workers", "1", "--box-mass", "0.7", "--out", "o.json", "--quiet"],
                           capsys)

@@ -23,6 +23,11 @@ from cobra_ref.infra.arguments import ArgumentTypeError
 from cobra_ref.planning.problem import Weights
 from cobra_ref.planning.results import params_reference
 
+def one_by_one(evaluate):
+    """A made-up ``evaluate(problem, x)`` as the search's ``evaluate_batch(problem, xs)``."""
+    return lambda problem, xs: [evaluate(problem, x) for x in xs]
+
+
 GOAL = (0.05, -0.01)
 
 
@@ -294,7 +299,7 @@ def test_the_companion_search_keeps_the_optimum_from_having_more_impacts_than_th
                 "terms": {"impact": I}, "contact": {"impact_impulse": I * 58.86 * problem.duration}}
 
     problem = dataclasses.replace(problem, weights=Weights(impact=10.0))  # the weight the landscape is made for
-    monkeypatch.setattr(search, "evaluate", made_up)
+    monkeypatch.setattr(search, "evaluate_batch", one_by_one(made_up))
     alone = sh.optimize(problem, sh.SearchOptions(maxiter=6, companion=False), executor=sh.SerialExecutor())
     assert alone.best["params"]["frequency"] == 0.5 and alone.best["terms"]["impact"] == 0.05
     result = sh.optimize(problem, sh.SearchOptions(maxiter=6), executor=sh.SerialExecutor())
@@ -324,7 +329,7 @@ def test_the_optimums_impacts_are_at_most_the_unpenalized_optimums_on_any_landsc
             return {"params": {"frequency": float(x[0])}, "error": None, "cost": G + 10 * I, "box_distance_to_goal": 0.0,
                     "terms": {"impact": I}, "contact": {"impact_impulse": I * problem.duration}}
 
-        monkeypatch.setattr(search, "evaluate", made_up)
+        monkeypatch.setattr(search, "evaluate_batch", one_by_one(made_up))
         record = sh.results.impact_comparison(sh.optimize(problem, sh.SearchOptions(maxiter=8), executor=sh.SerialExecutor()))
         assert record["optimum"]["impact_impulse_per_s"] <= record["without_impact_term"]["impact_impulse_per_s"]
         assert record["lower"] or record["same"]

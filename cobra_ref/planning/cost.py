@@ -11,7 +11,7 @@ import numpy as np
 from ..robots import cobra_model
 from ..step import SimulationError
 from ..trajectory import Trajectory
-from .problem import FAILED_COST, ShootingProblem, rollout
+from .problem import FAILED_COST, ShootingProblem, rollout, rollouts
 
 BOX_PATH_DT = 0.01  # [s] spacing of the box path kept with each rollout (the optimum's is drawn)
 
@@ -104,12 +104,23 @@ def evaluate(problem: ShootingProblem, x) -> dict:
     params JSON keeps for the optimum only (``results.result_to_dict``). What the executor runs (a
     module-level function: picklable for a process pool).
     """
-    entry = {"params": {n: float(v) for n, v in zip(problem.names, x)}, "error": None}
     try:
-        traj = rollout(problem, x)
+        traj, error = rollout(problem, x), ""
     except SimulationError as exc:
-        traj = exc.trajectory
-        entry["error"] = str(exc)
+        traj, error = exc.trajectory, str(exc)
+    return _entry(problem, x, traj, error)
+
+
+def evaluate_batch(problem: ShootingProblem, xs) -> list:
+    """``evaluate`` of each candidate in xs, their rollouts advanced together (``problem.rollouts``):
+    the same entries, bit for bit. What the executor runs (picklable)."""
+    return [_entry(problem, x, traj, error) for x, (traj, error) in zip(xs, rollouts(problem, xs))]
+
+
+def _entry(problem: ShootingProblem, x, traj, error: str) -> dict:
+    """The history entry (``evaluate``) of candidate x from its rollout ``traj`` (None: none) and
+    the rollout's error ("" if none)."""
+    entry = {"params": {n: float(v) for n, v in zip(problem.names, x)}, "error": error or None}
     if traj is None or entry["error"]:
         entry.update(cost=FAILED_COST, box_distance_to_goal=None, terms=None)
     else:

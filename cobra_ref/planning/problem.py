@@ -86,7 +86,8 @@ from ..kinematics import forward_kinematics
 from ..params import CobraParameters
 from ..quaternion import quat_mul
 from ..robots import cobra_model
-from ..simulate import LeftPhysicsWarning, simulate
+from ..batch import BatchRun
+from ..simulate import LeftPhysicsWarning, check_start, simulate
 from ..start import BoxPlacement, initial_state
 from ..step import SimulationError, StepSettings
 from ..trajectory import Trajectory
@@ -403,3 +404,30 @@ def rollout(problem: ShootingProblem, x, progress=None) -> Trajectory:
     with warnings.catch_warnings():  # a rollout's excess torque is the cost's tau_limit term, not news
         warnings.simplefilter("ignore", LeftPhysicsWarning)
         return simulate(model, problem.reference(x), problem.duration, problem.settings, q0, qd0, progress)
+
+
+def rollouts(problem: ShootingProblem, xs) -> list:
+    """``rollout`` of each candidate in xs, advanced together as one batch (:mod:`cobra_ref.batch`:
+    each the same steps, bit for bit, as its own ``rollout``): [(Trajectory or None, error)], the
+    error what ``rollout``'s ``SimulationError`` says ("" for a rollout that did not fail; a failed
+    one's trajectory ends where it failed, or is None if its start was refused)."""
+    arguments.instance("problem", problem, ShootingProblem, "make_problem('C', (0.1, 0.0))")
+    xs = [arguments.numbers("x", x, len(problem.names), labels=problem.names, error=ShootingError) for x in xs]
+    model = cobra_model(problem.cobra)
+    out, starts, members = [None] * len(xs), [], []
+    for i, x in enumerate(xs):
+        try:  # a start the simulation refuses fails this candidate alone, as in rollout
+            start = start_state(problem, x, model)
+            check_start(model, start[0])
+        except SimulationError as exc:
+            out[i] = (exc.trajectory, str(exc))
+            continue
+        starts.append(start)
+        members.append(i)
+    if members:
+        n_steps = arguments.duration_steps(problem.duration, problem.dt)
+        run = BatchRun(model, problem.settings, starts, n_steps)
+        run.advance([problem.reference(xs[i]) for i in members], n_steps)
+        for i, traj, message in zip(members, run.finish(), run.messages):
+            out[i] = (traj, message)
+    return out

@@ -18,7 +18,7 @@ import numpy as np
 from ..infra.executors import default_executor, shutdown
 from ..infra.signals import signal_name
 from ..gaits import gait_params
-from .cost import cost_without_impact, evaluate
+from .cost import cost_without_impact, evaluate_batch
 from .problem import DEFAULT_MAXITER, DEFAULTS, ShootingError, ShootingProblem, make_problem
 from .checkpoint import Checkpoint
 from .results import CHECK_DT, transfer
@@ -89,15 +89,18 @@ class _Evaluations:
         xs = [np.asarray(x, dtype=float) for x in xs]
         new = list({_key(x): x for x in xs if _key(x) not in self.index}.values())
         futures, done, t0 = [], [], time.perf_counter()
+        # one batch of rollouts per worker (cobra_ref.batch: the same entries as one task per point)
+        size = max(1, math.ceil(len(new) / self.width))
         try:
-            for x in new:
-                futures.append(self.executor.submit(evaluate, self.problem, x))
+            for i in range(0, len(new), size):
+                futures.append(self.executor.submit(evaluate_batch, self.problem, new[i:i + size]))
             for f in futures:
-                done.append(f.result())
+                done.extend(f.result())
         except KeyboardInterrupt:
             for f in futures:
                 f.cancel()
-            self._record([f.result() for f in futures if f.done() and not f.cancelled() and f.exception() is None])
+            self._record([e for f in futures if f.done() and not f.cancelled() and f.exception() is None
+                          for e in f.result()])
             raise
         if new and self.rollout_seconds is None:
             self.rollout_seconds = (time.perf_counter() - t0) / math.ceil(len(new) / self.width)
