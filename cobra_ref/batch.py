@@ -23,23 +23,28 @@ from .step import StepSettings
 
 
 class BatchRun:
-    """K runs of one model in lockstep (``simulate.Run`` for a batch): starts ``starts`` [(q0, qd0)],
-    logs of at most ``capacity`` steps each; ``t0`` and ``memory`` (a stepper's ``memory``, every
-    member's) start them in the middle of another run, as ``simulate.Run``'s do."""
+    """K runs in lockstep (``simulate.Run`` for a batch): ``model`` (every member's) or a list of
+    models (one per member, differing in anything but their bodies: ``fast.batch.same_bodies``),
+    starts ``starts`` [(q0, qd0)], logs of at most ``capacity`` steps each; ``t0`` and ``memory``
+    (a stepper's ``memory``, every member's) start them in the middle of another run, as
+    ``simulate.Run``'s do."""
 
-    def __init__(self, model: Model, settings: StepSettings, starts, capacity: int, t0: float = 0.0,
+    def __init__(self, model, settings: StepSettings, starts, capacity: int, t0: float = 0.0,
                  memory: dict | None = None):
-        self.model, self.settings, self.t0 = model, settings, float(t0)
         starts = list(starts)
-        self.stepping = BatchStepper(model, settings, len(starts))
+        models = list(model) if isinstance(model, (list, tuple)) else [model] * len(starts)
+        if len(models) != len(starts):
+            raise ValueError(f"a batch of {len(starts)} starts needs {len(starts)} models, got {len(models)}")
+        self.models, self.settings, self.t0 = models, settings, float(t0)
+        self.stepping = BatchStepper(models, settings)
         for member in self.stepping.members:
             member.memory = memory
-        self.Q = np.array([model.check_q(q0) for q0, _ in starts], dtype=float)
-        self.QD = np.array([model.check_qd(np.zeros(model.nv) if qd0 is None else qd0) for _, qd0 in starts],
+        self.Q = np.array([m.check_q(q0) for m, (q0, _) in zip(models, starts)], dtype=float)
+        self.QD = np.array([m.check_qd(np.zeros(m.nv) if qd0 is None else qd0) for m, (_, qd0) in zip(models, starts)],
                            dtype=float)
-        for q in self.Q:
-            check_start(model, q)
-        self.logs = [RunLog(model, capacity, settings.dt) for _ in starts]
+        for m, q in zip(models, self.Q):
+            check_start(m, q)
+        self.logs = [RunLog(m, capacity, settings.dt) for m in models]
         for log, q, qd in zip(self.logs, self.Q, self.QD):
             log.add_state(self.t0, q, qd)
         self.errors = [""] * len(starts)  # why each member left the batch ("": it did not)
@@ -50,9 +55,10 @@ class BatchRun:
     def size(self) -> int:
         return len(self.logs)
 
-    def advance(self, references, n_steps: int) -> None:
+    def advance(self, references, n_steps: int, progress=None) -> None:
         """``n_steps`` more steps, member k following ``references[k]``; a member whose step fails
-        (or leaves a non-finite state) keeps its log up to that step and its error."""
+        (or leaves a non-finite state) keeps its log up to that step and its error. ``progress(done,
+        total)`` is called every 250 steps and at the end, as ``simulate.Run.advance`` calls it."""
         if len(references) != self.size:
             raise ValueError(f"a batch of {self.size} needs {self.size} references, got {len(references)}")
         if self.k + n_steps > len(self.logs[0].tau):
@@ -61,7 +67,7 @@ class BatchRun:
         start = time.perf_counter()
         try:
             with one_blas_thread():
-                for _ in range(n_steps):
+                for i in range(n_steps):
                     active = [k for k, e in enumerate(self.errors) if not e]
                     if not active:
                         break
@@ -69,6 +75,8 @@ class BatchRun:
                     for k, res in zip(active, self.stepping.step(self.Q, self.QD, t, references, active)):
                         self._record(k, res, t)
                     self.k += 1
+                    if progress is not None and ((i + 1) % 250 == 0 or i + 1 == n_steps):
+                        progress(i + 1, n_steps)
         except KeyboardInterrupt as exc:  # Ctrl-C: every member keeps what it computed
             self.wall_time += time.perf_counter() - start
             start = None
@@ -99,8 +107,8 @@ class BatchRun:
         """Every member's Trajectory so far (its ``error`` set if it left the batch); each records
         its share of the batch's wall time."""
         share = self.wall_time / self.size
-        return [log.finish(share, error, meta(self.model, self.settings, member))
-                for log, error, member in zip(self.logs, self.errors, self.stepping.members)]
+        return [log.finish(share, error, meta(model, self.settings, member))
+                for log, error, model, member in zip(self.logs, self.errors, self.models, self.stepping.members)]
 
 
 def simulate_batch(model: Model, references, duration: float, settings: StepSettings, starts) -> list:

@@ -121,3 +121,17 @@ def test_the_optimizers_rollouts_cost_the_same_in_a_batch_as_one_by_one():
             np.testing.assert_array_equal(np.asarray(together[key], dtype=object), np.asarray(alone[key], dtype=object),
                                           err_msg=key)
     assert len({e["cost"] for e in evaluate_batch(problem, xs)}) == 3
+
+
+@pytest.mark.slow
+def test_the_figures_ensemble_members_run_in_a_batch_as_alone():
+    # members of one ensemble differ in friction (their models) and start (the box): one batch
+    from cobra_ref.reproduce.ensemble import members
+    from cobra_ref.reproduce.runs import RunSpec, batches, simulate_spec, simulate_specs
+
+    specs = [RunSpec("C", duration=0.2, member=m) for m in members("C", 3)[1:]] + [RunSpec("J", duration=0.2)]
+    assert [len(b) for b in batches(specs + [RunSpec("C", duration=0.3)], size=2)] == [2, 1, 1]
+    for (together, failed), spec in zip(simulate_specs(specs), specs):
+        alone, alone_failed = simulate_spec(spec)
+        assert failed is alone_failed is False and together.meta["member"] == alone.meta["member"]
+        _same_run(together, alone)

@@ -25,16 +25,31 @@ from .contacts import contact_jacobian_batch, find_contacts_batch
 from .stepper import FastStepper
 
 
+def same_bodies(a: Model, b: Model) -> bool:
+    """Whether two models have the same bodies, joints, gravity and contact geometry: what the
+    batched chain terms and contact search read (the rest of a step reads each member's model)."""
+    arrays = lambda m: (m.tree_pos + m.tree_rot + m.com + m.I_com  # noqa: E731
+                        + (m.gravity, m.spheres.body, m.spheres.center, m.spheres.radius)
+                        + tuple(x for box in m.boxes for x in (np.array(box.body), box.half)))
+    return (a.parent == b.parent and a.joint_type == b.joint_type and a.mass == b.mass
+            and len(a.boxes) == len(b.boxes) and all(np.array_equal(x, y) for x, y in zip(arrays(a), arrays(b))))
+
+
 class BatchStepper:
-    """``size`` fast steppers (``members``) stepped in lockstep (module docstring)."""
+    """Fast steppers (``members``) of ``models`` (one per member) stepped in lockstep (module
+    docstring); the models may differ in anything but their bodies (``same_bodies``: friction,
+    contact and servo parameters are each member's own)."""
 
     name = "batch"
 
-    def __init__(self, model: Model, settings: StepSettings, size: int):
-        if not (isinstance(size, int) and size >= 1):
-            raise ValueError(f"a batch has at least one member, got size = {size!r}")
-        self.model, self.settings = model, settings
-        self.members = [FastStepper(model, settings) for _ in range(size)]
+    def __init__(self, models, settings: StepSettings):
+        models = list(models)
+        if not models:
+            raise ValueError("a batch has at least one member")
+        if not all(same_bodies(models[0], m) for m in models[1:]):
+            raise ValueError("the members of a batch must have the same bodies, joints and contact geometry")
+        self.model, self.settings = models[0], settings
+        self.members = [FastStepper(model, settings) for model in models]
         self.chain = self.members[0].chain
         self.batched_seconds = 0.0  # the batched parts' time, summed
 

@@ -43,6 +43,7 @@ import json
 import os
 import sys
 import time
+import warnings
 from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import asdict, dataclass, field, replace
 
@@ -56,7 +57,9 @@ from ..placement import TravelPlacement, travel_placement
 from ..infra.progress import end_line, progress_printer, rewrite
 from ..infra.validation import DEFAULT_DT, check
 from ..robots import cobra_model
-from ..simulate import simulate
+from ..batch import BatchRun
+from ..infra.arguments import duration_steps
+from ..simulate import LeftPhysicsWarning, left_physics, simulate
 from ..start import BoxPlacement, initial_state
 from ..step import SimulationError, StepSettings
 from ..trajectory import Trajectory
@@ -64,7 +67,8 @@ from .cache import read_trajectory, seal_trajectory, verified
 from .ensemble import Member
 
 PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
-PLACEMENTS = ("per gait", "travel")  # the box placement rules: A9 (A31 for sidewinding), or A31 for every gait
+PLACEMENTS = ("per gait", "travel")
+BATCH_SIZE = 4  # runs advanced together in one task of a pool (``batches``; ``cobra_ref.batch``)  # the box placement rules: A9 (A31 for sidewinding), or A31 for every gait
 
 
 
@@ -188,27 +192,63 @@ def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Traject
     The simulation of ``run``, alone so that any executor can run it (nothing is written).
     ``placement``: sidewinding's ``nominal_placement``, if it is known (computed here otherwise).
     """
+    model, ref, start, placement = _start(spec, placement)
+    try:
+        traj, failed = simulate(model, ref, spec.duration, StepSettings(dt=spec.dt), *start, progress=progress), False
+    except SimulationError as exc:
+        if exc.trajectory is None:
+            raise
+        traj, failed = exc.trajectory, True
+    _annotate(traj, spec, ref, placement)
+    return traj, failed
+
+
+def simulate_specs(specs, progress=None, placement=None) -> list:
+    """``simulate_spec`` of each of ``specs`` (one ``batch_key``), their runs advanced together as
+    one batch (:mod:`cobra_ref.batch`: each the same steps, bit for bit, as its own run):
+    [(trajectory, failed)] in order."""
+    started = [_start(spec, placement) for spec in specs]
+    settings = StepSettings(dt=specs[0].dt)
+    n_steps = duration_steps(specs[0].duration, settings.dt)
+    run = BatchRun([s[0] for s in started], settings, [s[2] for s in started], n_steps)
+    run.advance([s[1] for s in started], n_steps, progress)
+    out = []
+    for spec, (_, ref, _, used), traj in zip(specs, started, run.finish()):
+        message = left_physics(traj)
+        if message:  # as simulate says it
+            warnings.warn(message, LeftPhysicsWarning, stacklevel=2)
+        _annotate(traj, spec, ref, used)
+        out.append((traj, bool(traj.error)))
+    return out
+
+
+def batch_key(spec: RunSpec) -> tuple:
+    """What the runs of one batch share (``simulate_specs``): the bodies (box size and mass), dt and duration."""
+    return (spec.box_size, spec.box_mass, spec.dt, spec.duration)
+
+
+def _start(spec: RunSpec, placement=None):
+    """(model, reference, (q0, qd0), placement) of ``spec``: its placed and settled start (``simulate_spec``)."""
     model = cobra_model(spec.cobra_parameters(), with_box=True)
     ref = spec.reference()
     if spec.travels and placement is None:
         placement = nominal_placement(spec)
     direction = None if placement is None else placement.direction
     member = spec.member
-    q0, qd0 = initial_state(model, ref, placement=BoxPlacement(
+    start = initial_state(model, ref, placement=BoxPlacement(
         gap=0.05 if placement is None else placement.box_gap, direction=direction,
         shift=None if member is None else member.box_shift, turn=0.0 if member is None else member.box_turn))
-    try:
-        traj, failed = simulate(model, ref, spec.duration, StepSettings(dt=spec.dt), q0, qd0, progress=progress), False
-    except SimulationError as exc:
-        if exc.trajectory is None:
-            raise
-        traj, failed = exc.trajectory, True
+    return model, ref, start, placement
+
+
+def _annotate(traj: Trajectory, spec: RunSpec, ref, placement) -> None:
+    """The run's inputs in ``traj.meta`` (gait, parameters, cache key, box placement, member)."""
+    direction = None if placement is None else placement.direction
     traj.meta.update({"gait": spec.gait, "gait_params": gait_params(ref), "cache_key": spec.key(),
                       "box_direction": None if direction is None else [float(x) for x in direction],
                       "box_gap": None if placement is None else placement.box_gap,
                       "box_reach": None if placement is None else placement.reach,
-                      "member": None if member is None else member.as_dict()})
-    return traj, failed
+                      "member": None if spec.member is None else spec.member.as_dict()})
 
 
 def store(spec: RunSpec, cache_dir: str, traj: Trajectory, failed: bool) -> str:
@@ -246,10 +286,21 @@ def load(spec: RunSpec, cache_dir: str) -> Trajectory | None:
     return None if path is None else verified(path, lambda p: read_trajectory(p, spec.key()))
 
 
-def _run_in_worker(spec: RunSpec, queue=None, placement=None):
-    """Executor entry: simulate one spec, reporting (label, done, total) to ``queue`` if given."""
-    report = None if queue is None else (lambda done, total: queue.put((spec.label(), done, total)))
-    return simulate_spec(spec, report, placement)
+def _run_in_worker(specs: list, queue=None, placement=None):
+    """Executor entry: simulate a batch of specs (``simulate_specs``), reporting (label, done,
+    total) to ``queue`` if given."""
+    label = specs[0].label() + (f" and {len(specs) - 1} more" if len(specs) > 1 else "")
+    report = None if queue is None else (lambda done, total: queue.put((label, done, total)))
+    return simulate_specs(specs, report, placement)
+
+
+def batches(specs, size: int = BATCH_SIZE) -> list:
+    """``specs`` in batches of at most ``size`` runs that share a ``batch_key``, in the order of
+    each key's first run (the longest runs first stay first)."""
+    groups: dict = {}
+    for spec in specs:
+        groups.setdefault(batch_key(spec), []).append(spec)
+    return [group[i:i + size] for group in groups.values() for i in range(0, len(group), size)]
 
 
 def _recorded_placement(traj: Trajectory):
@@ -314,33 +365,33 @@ def _run_todo(todo, cache_dir: str, workers, progress: bool, executor, stored: l
 
 
 def _run_on(executor, todo, cache_dir: str, progress: bool, queue, stored: list) -> None:
-    """Submit every spec of ``todo`` to ``executor``, store each result as it completes, report progress.
+    """Submit every spec of ``todo`` to ``executor`` in ``batches`` (one task each), store each
+    result as its batch completes, report progress.
 
     Sidewinding's members wait for their nominal run when it is in ``todo`` too, and start from
     the placement it recorded: its box-free placement run is then made once, not in every worker.
     """
     nominal = {s for s in todo if s.member is None}
     held = [s for s in todo if s.travels and s.member is not None and replace(s, member=None) in nominal]
-    futures = {executor.submit(_run_in_worker, s, queue): s for s in todo if s not in held}
+    futures = {executor.submit(_run_in_worker, b, queue): b for b in batches([s for s in todo if s not in held])}
     watcher = _Progress(todo, progress, queue)
     pending = set(futures)
     try:
         while pending:
             done, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
             for f in done:
-                spec = futures[f]
-                traj, failed = f.result()  # re-raises a run's exception here
-                stored.append(store(spec, cache_dir, traj, failed))
-                watcher.completed(spec)
-                # the members of a nominal run that has just recorded its placement go now
-                ready = [s for s in held if replace(s, member=None) == spec]
-                if ready:
-                    placement = _recorded_placement(traj)
-                    held = [s for s in held if s not in ready]
-                    for s in ready:
-                        started = executor.submit(_run_in_worker, s, queue, placement)
-                        futures[started] = s
-                        pending.add(started)
+                for spec, (traj, failed) in zip(futures[f], f.result()):  # re-raises a run's exception here
+                    stored.append(store(spec, cache_dir, traj, failed))
+                    watcher.completed(spec)
+                    # the members of a nominal run that has just recorded its placement go now
+                    ready = [s for s in held if replace(s, member=None) == spec]
+                    if ready:
+                        placement = _recorded_placement(traj)
+                        held = [s for s in held if s not in ready]
+                        for b in batches(ready):
+                            started = executor.submit(_run_in_worker, b, queue, placement)
+                            futures[started] = b
+                            pending.add(started)
             watcher.poll()
     except BaseException:
         for f in pending:
