@@ -12,12 +12,12 @@ frame of its body at their start::
               angle from a [deg, counter-clockwise seen from above]
     turn:     the change of a's direction, per cycle [deg]
 
-A lateral rolling robot travels across its axis (about -90 deg for the forward rolling of C); a
-taper b tilts that direction, a negative f reverses it, and the mirrored shapes reflect it: a
-primitive and its mirror travel at opposite angles and turn by opposite amounts, by symmetry
-(``tests/test_locomotion.py``). With ``alternate``, the measured cycles run p and p with -f in
-turn (forwards, then backwards): sidewinding turns the same way in both directions, so that
-alternation turns the robot where it stands.
+A lateral rolling robot travels across its axis; a taper b tilts that direction, a negative f
+reverses it, and the mirrored shapes reflect it: a primitive and its mirror travel at opposite
+angles and turn by opposite amounts, by symmetry (``tests/test_locomotion.py``). With
+``alternate``, the measured cycles run p and p with -f in turn (forwards, then backwards): a
+primitive that turns the same way in both directions then turns the robot where it stands
+(docs/planning.md measures each primitive).
 """
 
 from __future__ import annotations
