@@ -123,6 +123,9 @@ def test_bench_json_has_the_documented_keys(tmp_path, capfd):
     # OSQP solves every step's first QP; the readable reference step is timed too
     assert record["qp_solves_per_step"] >= 1.0 and record["reference_us_per_step"] > record["us_per_step"]
     assert "us/step" in capfd.readouterr().out
+    # the batched engine per member-step at K = 1, 4, 16, 64 (JSON keys are strings)
+    assert set(record["batched_us_per_member_step"]) == {"1", "4", "16", "64"} and not record["mujoco_skipped"]
+    assert all(us > 0 for us in record["batched_us_per_member_step"].values())
     # MuJoCo side by side at our dt (per step), at 0.1 ms and at the export's 0.05 ms (accuracy-matched),
     # where installed
     if record["mujoco"] is not None:

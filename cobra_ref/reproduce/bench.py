@@ -14,7 +14,7 @@ settled start, and reports:
   the first ``REFERENCE_STEPS`` steps of the same run (it is for reading, not for speed);
 * ``batched_us_per_member_step`` -- {K: wall time per member per step [us]} of the batched
   engine (:mod:`cobra_ref.batch`) advancing K copies of the same start and reference for
-  ``BATCH_STEPS`` steps, K in ``BATCH_SIZES``; ``batched_ratio_same_dt``: each over MuJoCo's time per
+  ``BATCH_STEPS`` steps (the run's steps if fewer), K in ``BATCH_SIZES``; ``batched_ratio_same_dt``: each over MuJoCo's time per
   step at our dt;
 * ``mujoco`` -- MuJoCo on the exported MJCF of the same model, its position actuators tracking
   the same reference from the same start over the same simulated time, at three timesteps:
@@ -28,7 +28,8 @@ settled start, and reports:
     simulated time: the accuracy-matched comparison (``ratio_accurate``; both simulators then
     agree within the like-for-like check's tolerances, docs/mujoco.md).
 
-  ``mujoco_us_per_step`` and ``ratio_vs_mujoco`` repeat the accurate pair.
+  ``mujoco_us_per_step`` and ``ratio_vs_mujoco`` repeat the accurate pair; ``mujoco_skipped``
+  says that the comparison was not asked for (``--no-mujoco``), as against MuJoCo missing.
 
 One core: the loop is single-threaded Python + OSQP; MuJoCo runs single-threaded too.
 """
@@ -73,9 +74,10 @@ def run_bench(duration: float = 2.0, dt: float = DEFAULT_DT, with_mujoco: bool =
         "fixed_point_iterates_per_step": round(float(np.mean(traj.steps["fp_iter"])), 3),
         "mean_contacts": round(float(np.mean(traj.steps["n_contacts"])), 2),
         "reference_us_per_step": round(short.wall_time / len(short.tau) * 1e6, 1),
-        "batched_us_per_member_step": batched_us(model, reference, settings, q0, qd0),
+        "batched_us_per_member_step": batched_us(model, reference, settings, q0, qd0, n_steps=min(n, BATCH_STEPS)),
         "batched_ratio_same_dt": None,
         "mujoco": None,
+        "mujoco_skipped": not with_mujoco,
         "mujoco_us_per_step": None,
         "ratio_vs_mujoco": None,
         "machine": f"{platform.processor() or platform.machine()}, Python {platform.python_version()}",
@@ -167,7 +169,7 @@ def format_table(record: dict) -> str:
     ratios = record["batched_ratio_same_dt"] or {}
     for K, us in record["batched_us_per_member_step"].items():
         ratio = f"   = {ratios[K]} x MuJoCo at the same dt" if K in ratios else ""
-        lines.append(f"{f'batched, K = {K}':<28}{us:>10.1f} us per member-step ({BATCH_STEPS} steps){ratio}")
+        lines.append(f"{f'batched, K = {K}':<28}{us:>10.1f} us per member-step{ratio}")
     if record["mujoco"] is not None:
         for name, what in (("same_dt", "the per-step comparison"), ("tenth_ms", "at 0.1 ms"),
                            ("accurate", "accuracy-matched")):
@@ -176,5 +178,6 @@ def format_table(record: dict) -> str:
             lines.append(f"{label:<28}{mj['us_per_step']:>10.2f} us per step of ours   fast = {mj['ratio']} x "
                          f"({what}; its box moved {mj['box_travel_m']:g} m)")
     else:
-        lines.append("MuJoCo: not installed (pip install mujoco), no comparison")
+        lines.append("MuJoCo: skipped (--no-mujoco)" if record.get("mujoco_skipped") else
+                     "MuJoCo: not installed (pip install mujoco), no comparison")
     return "\n".join(lines)
