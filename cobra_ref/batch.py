@@ -18,7 +18,7 @@ from .fast.batch import BatchStepper
 from .infra import arguments
 from .infra.executors import one_blas_thread
 from .model import Model
-from .simulate import EXPECTED, RunLog, check_start, meta
+from .simulate import RunLog, check_start, meta, step_failure
 from .step import StepSettings
 
 
@@ -90,14 +90,10 @@ class BatchRun:
 
     def _record(self, k: int, res, t: float) -> None:
         """Member k's result of the step at t: logged, or its error (named as ``simulate.Run`` names it)."""
-        where = f"step {self.k} (t = {t:.4f} s)"
         if isinstance(res, BaseException):
-            what = str(res) if isinstance(res, EXPECTED) else f"{type(res).__name__}: {res}"
-            self.errors[k] = f"{where}: {what}"
-            self.messages[k] = f"step failed at step {self.k}, t = {t:.4f} s: {what}"
+            self.errors[k], self.messages[k] = step_failure(self.k, t, res)
         elif not math.isfinite(res.q.sum() + res.qd.sum()):
-            self.errors[k] = f"{where}: non-finite state"
-            self.messages[k] = f"non-finite state at step {self.k}, t = {t:.4f} s"
+            self.errors[k], self.messages[k] = step_failure(self.k, t)
         else:
             self.Q[k], self.QD[k] = res.q, res.qd
             self.logs[k].add_step(self.k, res)

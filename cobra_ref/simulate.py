@@ -137,22 +137,22 @@ class Run:
                     try:
                         res = self.stepping.step(self.q, self.qd, t, reference)
                         if not math.isfinite(res.q.sum() + res.qd.sum()):  # a NaN or inf anywhere makes the sum non-finite
-                            raise _NonFinite(f"non-finite state at step {k}, t = {t:.4f} s")
+                            raise _NonFinite()
                         self.q, self.qd = res.q, res.qd
                         log.add_step(k, res)
                         log.add_state(t + dt, self.q, self.qd)
                         self.k = k + 1
                         if progress is not None and ((i + 1) % 250 == 0 or i + 1 == n_steps):
                             progress(i + 1, n_steps)
-                    except _NonFinite as exc:
-                        raise SimulationError(str(exc), self.finish(f"step {k} (t = {t:.4f} s): non-finite state")) from None
+                    except _NonFinite:
+                        error, message = step_failure(k, t)
+                        raise SimulationError(message, self.finish(error)) from None
                     except KeyboardInterrupt as exc:
                         exc.trajectory = self.finish(f"step {k} (t = {t:.4f} s): interrupted")
                         raise
                     except Exception as exc:  # any failure of the step: keep what was computed, name step and time
-                        what = str(exc) if isinstance(exc, EXPECTED) else f"{type(exc).__name__}: {exc}"
-                        traj = self.finish(f"step {k} (t = {t:.4f} s): {what}")
-                        raise SimulationError(f"step failed at step {k}, t = {t:.4f} s: {what}", traj) from exc
+                        error, message = step_failure(k, t, exc)
+                        raise SimulationError(message, self.finish(error)) from exc
             finally:
                 self.wall_time += time.perf_counter() - self._started
                 self._started = None
@@ -169,6 +169,16 @@ EXPECTED = (ContactSolveError, np.linalg.LinAlgError, SimulationError, ValueErro
 
 class _NonFinite(Exception):
     """A step that left NaN or inf in the state."""
+
+
+def step_failure(k: int, t: float, exc: BaseException | None = None) -> tuple[str, str]:
+    """(the trajectory's ``error``, the ``SimulationError``'s message) of a run whose step k at
+    time t raised ``exc``, or, with none, left a non-finite state: how every run names its failure."""
+    where = f"step {k} (t = {t:.4f} s)"
+    if exc is None:
+        return f"{where}: non-finite state", f"non-finite state at step {k}, t = {t:.4f} s"
+    what = str(exc) if isinstance(exc, EXPECTED) else f"{type(exc).__name__}: {exc}"
+    return f"{where}: {what}", f"step failed at step {k}, t = {t:.4f} s: {what}"
 
 
 def meta(model: Model, settings: StepSettings, stepper) -> dict:

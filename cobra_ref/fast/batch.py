@@ -46,7 +46,7 @@ class BatchStepper:
         models = list(models)
         if not models:
             raise ValueError("a batch has at least one member")
-        if not all(same_bodies(models[0], m) for m in models[1:]):
+        if not all(m is models[0] or same_bodies(models[0], m) for m in models[1:]):
             raise ValueError("the members of a batch must have the same bodies, joints and contact geometry")
         self.model, self.settings = models[0], settings
         self.members = [FastStepper(model, settings) for model in models]
@@ -67,8 +67,8 @@ class BatchStepper:
         for j, k in enumerate(active):
             try:
                 own = ChainTerms(*(part[j] for part in terms))
-                out.append(self.members[k].step(Q[k], QD[k], t, references[k], terms=own,
-                                                contacts=(contacts[j], J_c[j])))
+                out.append(self.members[k].step(Q[k], QD[k], t, references[k], terms=own, contacts=contacts[j],
+                                                J_c=J_c[j]))
             except KeyboardInterrupt:
                 raise
             except Exception as exc:  # this member fails; the others go on

@@ -46,7 +46,9 @@ def find_contacts_batch(model, R: np.ndarray, o: np.ndarray, margin: float) -> l
         # the box is at least the largest excess of the centre over a half extent
         c_b = (centers - p_b[:, None, :]) @ R_b
         near_member, near = ((np.abs(c_b) - box.half).max(axis=-1) - sph.radius < margin).nonzero()
-        for k in (np.unique(near_member).tolist() if K > 1 else [0] * (len(near) > 0)):
+        # the members with spheres near the box (np.unique only when there is more than one member)
+        near_members = np.unique(near_member).tolist() if K > 1 else ([0] if len(near) else [])
+        for k in near_members:
             idx = near[near_member == k] if K > 1 else near
             g_b, n_b, a_b, b_b = sphere_box_gaps(centers[k, idx], sph.radius[idx], R_b[k], p_b[k], box.half)
             on = g_b < margin

@@ -77,11 +77,11 @@ class FastStepper:
         return _reference(reference, t)[:2]
 
     def step(self, q: np.ndarray, qd: np.ndarray, t: float, reference, tau_ext=None, terms=None,
-             contacts=None) -> StepResult:
+             contacts=None, J_c=None) -> StepResult:
         """One step from (q, qd) at time t: :func:`cobra_ref.step.step`, faster (module docstring).
 
         ``terms``: this step's chain terms at (q, ``step.midpoint_velocity(qd, self.memory)``), and
-        ``contacts``: its (Contacts, J_c), if they were computed already (the batched engine,
+        ``contacts`` with their Jacobian ``J_c``, if they were computed already (the batched engine,
         :mod:`cobra_ref.fast.batch`)."""
         s, model, F, P = self.settings, self.model, self.free, self.prescribed
         dt, servo = s.dt, s.joint_servo
@@ -104,8 +104,7 @@ class FastStepper:
         # Steps 4-5: contacts, J_c, the rows J over F, G = B^T B with B = L^-1 J_F^T
         if contacts is None:
             contacts = find_contacts(model, terms, s.margin)
-            contacts = (contacts, contact_jacobian(self.chain, terms, contacts))
-        contacts, J_c = contacts
+            J_c = contact_jacobian(self.chain, terms, contacts)
         J = np.concatenate([J_c, self.servo_J])
         B = _trtrs(L, J[:, F].T, lower=1)[0]
         Minv_JT = _trtrs(L, B, lower=1, trans=1)[0]

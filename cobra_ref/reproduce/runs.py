@@ -67,8 +67,8 @@ from .cache import read_trajectory, seal_trajectory, verified
 from .ensemble import Member
 
 PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
-PLACEMENTS = ("per gait", "travel")
-BATCH_SIZE = 4  # runs advanced together in one task of a pool (``batches``; ``cobra_ref.batch``)  # the box placement rules: A9 (A31 for sidewinding), or A31 for every gait
+PLACEMENTS = ("per gait", "travel")  # the box placement rules: A9 (A31 for sidewinding), or A31 for every gait
+BATCH_SIZE = 4  # runs advanced together in one task of a pool (``batches``; ``cobra_ref.batch``)
 
 
 
@@ -207,13 +207,13 @@ def simulate_specs(specs, progress=None, placement=None) -> list:
     """``simulate_spec`` of each of ``specs`` (one ``batch_key``), their runs advanced together as
     one batch (:mod:`cobra_ref.batch`: each the same steps, bit for bit, as its own run):
     [(trajectory, failed)] in order."""
-    started = [_start(spec, placement) for spec in specs]
+    models, references, starts, placements = zip(*(_start(spec, placement) for spec in specs))
     settings = StepSettings(dt=specs[0].dt)
     n_steps = duration_steps(specs[0].duration, settings.dt)
-    run = BatchRun([s[0] for s in started], settings, [s[2] for s in started], n_steps)
-    run.advance([s[1] for s in started], n_steps, progress)
+    run = BatchRun(list(models), settings, starts, n_steps)
+    run.advance(references, n_steps, progress)
     out = []
-    for spec, (_, ref, _, used), traj in zip(specs, started, run.finish()):
+    for spec, ref, used, traj in zip(specs, references, placements, run.finish()):
         message = left_physics(traj)
         if message:  # as simulate says it
             warnings.warn(message, LeftPhysicsWarning, stacklevel=2)
