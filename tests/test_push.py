@@ -7,11 +7,11 @@ import pytest
 
 from cobra_ref.cli import main
 from cobra_ref.infra.executors import SerialExecutor
-from cobra_ref.planning.primitives import Primitive
-from cobra_ref.planning.receding import PushOptions, candidate_cost, candidates, push, replay
+from cobra_ref.planning.primitives import ROLLING, Primitive
+from cobra_ref.planning.receding import GENTLE, PushOptions, candidate_cost, candidates, push, replay
 from cobra_ref.step import StepSettings
 
-# two periods of 0.1 s at dt = 2 ms, one period ahead, one noisy sample: 10 rollouts of 50 steps per re-plan
+# two periods of 0.1 s at dt = 2 ms, one period ahead, one noisy sample: 20 rollouts of 50 steps per re-plan
 TINY = PushOptions(goal=(0.05, 0.0), period=0.1, horizon=1, budget=0.2, samples=1,
                    settings=StepSettings(dt=0.002))
 
@@ -23,13 +23,16 @@ def pushed():
 
 def test_the_candidates_of_a_replan():
     # the last choice continued, then stopped, rolled back (then on), a stop near the goal, the four
-    # other rolling shapes, the samples
+    # other rolling shapes, near the goal a gentle push of each shape each way then a stop, the samples
     pairs = candidates(Primitive("C"), np.random.default_rng(0), 2)
-    assert len(pairs) == 5 + 4 + 2
+    assert len(pairs) == 5 + 4 + 10 + 2
     assert pairs[0] == (Primitive("C"), Primitive("C")) and pairs[1][1].family == "stop"
     assert pairs[2][0].frequency == -0.5 and pairs[3] == (pairs[2][0], Primitive("C")) and pairs[4][0].family == "stop"
     assert {p[0].family for p in pairs[5:9]} == {"S", "S-mirror", "J", "J-mirror"}
-    assert all(p[0].frequency > 0 for p in pairs[9:])  # noise keeps the direction of rolling
+    gentle = pairs[9:19]
+    assert {(p[0].family, p[0].frequency) for p in gentle} == {(f, s * GENTLE[1]) for f in ROLLING for s in (1, -1)}
+    assert all(p[0].amplitude == GENTLE[0] and p[1].family == "stop" for p in gentle)
+    assert all(p[0].frequency > 0 for p in pairs[19:])  # noise keeps the direction of rolling
     assert len(candidates(Primitive("C"), np.random.default_rng(0), 2, near=False)) == 4 + 4 + 2
 
 
@@ -37,7 +40,7 @@ def test_each_period_applies_the_cheapest_candidate(pushed):
     # one re-plan by hand: the chosen primitive is the argmin of the candidates' costs from that state
     assert len(pushed.cycles) == 2
     first = pushed.cycles[0]
-    assert first["rollouts"] == 10 and first["t"] == 0.0
+    assert first["rollouts"] == 5 + 4 + 10 + 1 and first["t"] == 0.0  # near the goal: the gentle pushes too
     assert Primitive(**first["chosen"]) == pushed.plan.primitives[0]
     assert pushed.plan.starts == [0.0, pytest.approx(0.1)]
 
@@ -164,7 +167,7 @@ def test_the_pushing_point_lies_behind_the_box_on_the_line_from_the_target():
     ("goal", (0.1,), ValueError), ("goal", (float("nan"), 0.0), ValueError), ("goal", "0.1,0", TypeError),
     ("via", ((0.1, 0.0, 0.2),), ValueError), ("via", "0.1,0", TypeError), ("period", 0.0, ValueError),
     ("horizon", 0, ValueError), ("budget", -1.0, ValueError), ("samples", 1.5, ValueError),
-    ("w_impact", -1.0, ValueError), ("settings", {"dt": 0.001}, TypeError), ("start", "C", TypeError),
+    ("w_impact", -1.0, ValueError), ("w_face", -1.0, ValueError), ("settings", {"dt": 0.001}, TypeError), ("start", "C", TypeError),
 ])
 def test_push_options_are_checked_by_the_command_lines_rules(field, value, error):
     from dataclasses import replace

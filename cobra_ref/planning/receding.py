@@ -5,24 +5,31 @@ specified point, and corresponding suitable joint commands are derived", closed 
 period T_p (``PushOptions.period``), from the state the run has reached (the plant's q, qd, its
 stepper's memory and the plan so far):
 
-1. candidates (``candidates``): pairs of primitives (:mod:`cobra_ref.planning.primitives`), one
-   for each of the next two periods: the last moving choice continued (the warm start), the same
-   then a stop, the same rolling back (for both periods, and for one then on again: back to a box
-   the robot rolled past), a stop (only with the box within ``NEAR`` of the target), each rolling family at
-   the last choice's amplitude and frequency, and ``samples`` copies of the last choice with
-   Gaussian noise on amplitude, frequency and taper (predictive sampling; the noise from a
-   generator seeded by ``seed`` and the period's index);
+1. candidates: while the robot faces away from the target (its facing error |phi| above
+   ``facing.FACE_TOL``, the box farther than ``NEAR`` from the target), turns where it stands
+   (``facing.turning_candidates``); otherwise pairs of primitives (``candidates``;
+   :mod:`cobra_ref.planning.primitives`), one for the next period and one for the rest of the
+   horizon: the last rolling choice continued (the warm start), the same then a stop, the same
+   rolling back (for both, and for one then on again: back to a box the robot rolled past), each
+   rolling family at the last choice's amplitude and frequency, ``samples`` copies of the last
+   choice with Gaussian noise on amplitude, frequency and taper (predictive sampling; the noise
+   from a generator seeded by ``seed`` and the period's index), and with the box within ``NEAR``
+   of the target a stop and a gentle push (``GENTLE``) of each rolling shape each way, then a stop;
 2. each candidate is rolled out over the horizon from that state (through the executor, the
    candidates in batches advanced together: ``replan_batched``), and costs, in metres
    (``candidate_cost``)::
 
-       J = d(t + H T_p) + d(t + T_p) / 2 + w_a a(t + H T_p) + w_e E + w_I I + w_tau P_tau
+       J = d(t + H T_p) (1 + w_f (1 - cos phi)) + d(t + T_p) / 2 + w_a a(t + H T_p)
+           + w_e E + w_I I + w_tau P_tau
 
-   d: the box centre's horizontal distance to the current target; a: the distance from the
-   robot's nearest body centre to the pushing point, behind the box on the line from the target
-   through the box's centre, a box half-size plus a link radius out (where a pusher must be to push
-   the box towards the target, as in pusher-slider planning); E, I, P_tau the shooting cost's
-   effort, impact and torque-limit terms (:mod:`cobra_ref.planning.cost`) over the horizon;
+   d: the box centre's horizontal distance to the current target; phi: the robot's facing error at
+   the horizon's end (:mod:`cobra_ref.planning.facing`; the factor counts the distance a robot
+   facing away cannot push off, and vanishes with d; weight ``w_face``); a: the distance from the robot's nearest
+   body centre to the pushing point, behind the box on the line from the target through the box's
+   centre, a box half-size plus a link radius out (where a pusher must be to push the box towards
+   the target, as in pusher-slider planning; weight ``w_approach``, and 1 for a turn, which must
+   end with the box in reach); E, I, P_tau the shooting cost's effort, impact and torque-limit
+   terms (:mod:`cobra_ref.planning.cost`) over the horizon;
 3. the best candidate's first primitive is appended to the plan and the plant runs one period.
 
 The plant may run at another time step than the rollouts (``plant_dt``: the plan must not be
@@ -52,12 +59,14 @@ from ..simulate import Run
 from ..start import initial_state
 from ..step import StepSettings
 from .cost import effort_term, excess_term, impact_term, robot_weight
+from .facing import FACE_TOL, facing, turning_candidates
 from .primitives import ROLLING, PlanReference, Primitive
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
 ROLLOUT_BATCHES = 2  # a re-plan's candidates go to the executor as this many batches (``replan_batched``)
 NEAR = 0.05  # [m] a stop for the whole horizon is a candidate only with the box this near its target
 PLANTS = ("cobra_ref", "mujoco")
+GENTLE = (0.25, 0.25)  # [rad, Hz] amplitude and frequency of the gentle pushes among the candidates
 
 
 @dataclass(frozen=True)
@@ -67,7 +76,7 @@ class PushOptions:
     goal: tuple = (0.25, 0.0)  # (dx, dy) from the box's start, world axes (x: the robot's initial heading)
     via: tuple = ()  # waypoints ((dx, dy), ...) on the way, same axes
     period: float = 1.0  # T_p: one re-plan per period
-    horizon: int = 2  # H: periods each rollout looks ahead
+    horizon: int = 3  # H: periods each rollout looks ahead
     budget: float = 30.0  # simulated time at most
     tolerance: float = 0.01  # done within this of the goal
     via_tolerance: float = 0.03  # a waypoint is passed within this
@@ -79,7 +88,8 @@ class PushOptions:
     w_effort: float = 0.005  # [m] per unit of E
     w_impact: float = 1.0  # [m] per unit of I: claim NI's 1 % of the robot's weight costs 1 cm
     w_tau: float = 0.1  # [m] per unit of P_tau
-    w_approach: float = 0.0  # per metre of a; off by default (docs/planning.md, "What it does now")
+    w_approach: float = 0.5  # per metre of a (docs/planning.md, "Turning before pushing")
+    w_face: float = 1.0  # the facing factor's weight: the end distance counts d (1 + w_face (1 - cos phi))
     plant_dt: float | None = None  # [s] the plant's time step (None: the rollouts' settings.dt)
     plant: str = "cobra_ref"  # the plant's simulator: "cobra_ref" (``simulate.Run``) or "mujoco" (``push``'s plant=)
 
@@ -95,7 +105,8 @@ class PushOptions:
         for name, rule in (("period", "push_period"), ("horizon", "push_horizon"), ("budget", "push_budget"),
                            ("tolerance", "push_tolerance"), ("via_tolerance", "push_tolerance"),
                            ("samples", "push_samples"), ("seed", "seed"), ("w_effort", "weight"),
-                           ("w_impact", "weight"), ("w_tau", "weight"), ("w_approach", "weight")):
+                           ("w_impact", "weight"), ("w_tau", "weight"), ("w_approach", "weight"),
+                           ("w_face", "weight")):
             put(name, arguments.number(name, getattr(self, name), RULES[rule]))
         arguments.instance("start", self.start, Primitive, "Primitive('C', 0.5, 0.5)")
         arguments.instance("settings", self.settings, StepSettings, "StepSettings(dt=0.001)")
@@ -112,13 +123,17 @@ class PushOptions:
 
 
 def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: bool = True) -> list:
-    """The candidate pairs (first period, second period) of one re-plan from the last moving
-    primitive ``moving`` (module docstring); a stop for both periods only when the box is ``near``
-    its goal (far from it, standing still would always be a safe choice and the push would stall)."""
+    """The candidate pairs (first period, the rest of the horizon) of one re-plan from the last
+    rolling primitive ``moving`` (module docstring); a stop for the whole horizon and the gentle
+    pushes only when the box is ``near`` its target (far from it, standing still would always be a
+    safe choice and the push would stall)."""
     stop, back = Primitive("stop"), replace(moving, frequency=-moving.frequency)
     # rolling back (and then on again) brings the robot back to a box it has rolled past
     out = [(moving, moving), (moving, stop), (back, back), (back, moving)] + ([(stop, stop)] if near else [])
     out += [(p, p) for p in (replace(moving, family=f) for f in ROLLING) if p != moving]
+    if near:  # a gentle push of every rolling shape, each way, then a stop: the small corrections near the target
+        out += [(g, stop) for g in (Primitive(f, GENTLE[0], sign * GENTLE[1], moving.taper) for f in ROLLING
+                                    for sign in (1, -1))]
     for _ in range(samples):
         noisy = _perturbed(moving, rng)
         out.append((noisy, noisy))
@@ -147,6 +162,7 @@ class Rollout:
     memory: dict | None
     target: tuple  # world (x, y)
     options: PushOptions
+    turning: bool = False  # a turning re-plan's rollout: its cost adds the pushing distance a
 
 
 def candidate_cost(job: Rollout) -> dict:
@@ -186,8 +202,12 @@ def _rollout_cost(job: Rollout, traj, model, n_period: int) -> dict:
     effort = effort_term(traj, o.cobra.tau_max, duration)
     impact = impact_term(traj, robot_weight(model), duration)
     p_tau = excess_term(traj, "tau_excess", o.cobra.tau_max, duration)
-    approach = pushing_distance(model, traj.q[-1], target, o.cobra) if o.w_approach else 0.0
-    cost = d_end + 0.5 * d_mid + o.w_approach * approach + o.w_effort * effort + o.w_impact * impact + o.w_tau * p_tau
+    w_a = 1.0 if job.turning else o.w_approach  # a turn must end with the box in reach
+    approach = pushing_distance(model, traj.q[-1], target, o.cobra) if w_a else 0.0
+    # the distance the robot cannot push away as it faces: d (1 + w_face (1 - cos phi))
+    faced = d_end * (1 + o.w_face * (1 - np.cos(facing(model, traj.q[-1], target))))
+    cost = (faced + 0.5 * d_mid + w_a * approach + o.w_effort * effort + o.w_impact * impact
+            + o.w_tau * p_tau)
     return {"cost": cost, "distance": d_end, "box": traj.box_pose[-1, :2].tolist(), "error": None}
 
 
@@ -242,21 +262,26 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
 
     try:
         for k in range(n_budget):
-            t = run.t
-            pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=distance() <= NEAR)
-            best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o), executor)
+            t, phi = run.t, facing(model, run.q, targets[aim])
+            turning = bool(abs(phi) > FACE_TOL and distance() > NEAR)
+            if turning:  # the robot faces away from the target: it turns where it stands first
+                pairs = turning_candidates(phi)
+            else:
+                pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=distance() <= NEAR)
+            best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, turning), executor)
             last = pairs[best][0]
-            moving = last if last.family != "stop" else moving
+            moving = last if last.family in ROLLING else moving
             plan.extend(last, t)
             run.advance(plan, n_period)
             d = distance()
-            cycles.append({"t": t, "chosen": last.to_dict(), "predicted_cost": results[best]["cost"],
+            cycles.append({"t": t, "facing": float(np.degrees(phi)), "mode": "turn" if turning else "push",
+                           "chosen": last.to_dict(), "predicted_cost": results[best]["cost"],
                            "distance": d, "target": list(targets[aim]), "rollouts": len(pairs),
                            "wall_time": time.perf_counter() - start,
                            "candidates": [{"pair": [_name(p) for p in pair], "cost": r["cost"],
                                            "distance": r["distance"]} for pair, r in zip(pairs, results)]})
             if progress is not None:
-                progress(f"t = {run.t:5.1f} s  {_name(last):<28} box {100 * d:6.2f} cm from "
+                progress(f"t = {run.t:5.1f} s  phi {np.degrees(phi):+6.1f} deg  {_name(last):<41} box {100 * d:6.2f} cm from "
                          f"{'the goal' if aim == len(targets) - 1 else f'waypoint {aim + 1}'}")
             if aim < len(targets) - 1 and d <= o.via_tolerance:
                 aim += 1
@@ -288,12 +313,13 @@ def replan_batched(jobs: list, executor=None) -> tuple[int, list]:
     return int(np.argmin([r["cost"] for r in results])), results
 
 
-def _jobs(plan: PlanReference, run: Run, pairs: list, target, options: PushOptions) -> list:
-    """The ``Rollout`` of every pair from the state ``run`` has reached, in order."""
+def _jobs(plan: PlanReference, run: Run, pairs: list, target, options: PushOptions, turning: bool = False) -> list:
+    """The ``Rollout`` of every pair from the state ``run`` has reached, in order (``turning``: a
+    turning re-plan's)."""
     # the plant's stepper memory (its last velocity, its impulses) holds for rollouts at its own dt only
     memory = run.stepping.memory if run.settings.dt == options.settings.dt else None
     plan_so_far, q, qd = plan.to_dict(), run.q, run.qd  # the same for every candidate
-    return [Rollout(plan_so_far, pair, run.t, q, qd, memory, target, options) for pair in pairs]
+    return [Rollout(plan_so_far, pair, run.t, q, qd, memory, target, options, turning) for pair in pairs]
 
 
 def _name(p: Primitive) -> str:
@@ -317,7 +343,7 @@ def push_record(result: PushResult, options: PushOptions) -> dict:
                         "start": o.start.to_dict(), "settings": asdict(o.settings), "plant_dt": o.plant_dt, "plant": o.plant,
                         "cobra": asdict(o.cobra),
                         "weights": {"effort": o.w_effort, "impact": o.w_impact, "tau": o.w_tau,
-                                    "approach": o.w_approach}},
+                                    "approach": o.w_approach, "face": o.w_face}},
             "plan": result.plan.to_dict(), "cycles": result.cycles, "goal_world": list(result.goal_world),
             "reached": result.reached, "reason": result.reason, "final_distance": final,
             "simulated_time": traj.duration,
@@ -336,7 +362,8 @@ def load_push(record: dict) -> tuple[dict, PushOptions]:
                           via_tolerance=o["via_tolerance"], samples=o["samples"], seed=o["seed"],
                           start=Primitive(**o["start"]), settings=StepSettings(**o["settings"]), cobra=cobra,
                           w_effort=o["weights"]["effort"], w_impact=o["weights"]["impact"], w_tau=o["weights"]["tau"],
-                          w_approach=o["weights"]["approach"], plant_dt=o.get("plant_dt"),
+                          w_approach=o["weights"]["approach"], w_face=o["weights"].get("face", 0.0),
+                          plant_dt=o.get("plant_dt"),
                           plant=o.get("plant", "cobra_ref"))
     return record["plan"], options
 

@@ -1,0 +1,59 @@
+"""Which way the robot can push the box, and the turning candidates that face it towards the target.
+
+A lateral rolling robot travels across its body axis a (:mod:`cobra_ref.planning.locomotion`), so
+the only direction it can push the box in is across a, towards the side the box is on. Its push
+direction and the facing error phi to the target T::
+
+    r     = a turned by -90 deg (the robot's right, where rolling at f > 0 travels)
+    n     = sign((B - p) . r) r       p: the robot's link centre nearest the box centre B
+    phi   = the angle from n to T - B, counter-clockwise, in (-pi, pi]
+
+Rolling shapes push within about 30 deg of n (C, J and J-mirror push the box at -32 to +32 deg of
+the robot's heading), so for |phi| above ``FACE_TOL`` the planner turns the robot first. It turns
+where it stands with sidewinding: sidewinding turns clockwise whether it winds forwards or backwards,
+its mirror counter-clockwise, so forwards then backwards turns it with little travel (measured in
+docs/planning.md). Turning about a point near the box turns n with a; it cannot bring the robot to the
+box's other side (|phi| near 180 deg stays so).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .locomotion import body_axis, link_centres
+from .primitives import Primitive
+
+FACE_TOL = np.radians(25.0)  # [rad] a re-plan turns the robot while |phi| exceeds this
+TURN_FREQUENCY = 1.0  # [Hz] one sidewinding cycle per period of 1 s
+TURN_AMPLITUDES = (0.3, 0.5)  # [rad] the turning candidates' amplitudes
+
+
+def push_direction(model, q) -> np.ndarray:
+    """n (2,): the unit direction across the body axis towards the box (module docstring)."""
+    points = link_centres(model, q)
+    box = model.boxes[0].body
+    robot = np.delete(points, box, axis=0)
+    a = body_axis(robot)
+    r = np.array([a[1], -a[0]])
+    nearest = robot[np.argmin(np.linalg.norm(robot - points[box], axis=1))]
+    return r if (points[box] - nearest) @ r >= 0 else -r
+
+
+def facing(model, q, target) -> float:
+    """phi [rad]: the angle from the push direction n to the box's way to ``target`` (module docstring)."""
+    n = push_direction(model, q)
+    box = model.boxes[0].body
+    way = np.asarray(target, dtype=float) - link_centres(model, q)[box]
+    return float(np.arctan2(n[0] * way[1] - n[1] * way[0], n @ way))
+
+
+def turning_candidates(phi: float) -> list:
+    """The candidate pairs of a turning re-plan for the facing error ``phi``: sidewinding-mirror
+    (counter-clockwise) for phi > 0, sidewinding otherwise, at each of ``TURN_AMPLITUDES``, forwards
+    then backwards and backwards then forwards."""
+    family = "sidewinding-mirror" if phi > 0 else "sidewinding"
+    out = []
+    for amplitude in TURN_AMPLITUDES:
+        ahead, back = Primitive(family, amplitude, TURN_FREQUENCY), Primitive(family, amplitude, -TURN_FREQUENCY)
+        out += [(ahead, back), (back, ahead)]
+    return out
