@@ -11,7 +11,7 @@ from cobra_ref.planning.primitives import ROLLING, Primitive
 from cobra_ref.planning.receding import GENTLE, PushOptions, candidate_cost, candidates, push, replay
 from cobra_ref.step import StepSettings
 
-# two periods of 0.1 s at dt = 2 ms, one period ahead, one noisy sample: 20 rollouts of 50 steps per re-plan
+# two periods of 0.1 s at dt = 2 ms, one period ahead, one noisy sample: 19 rollouts of 50 steps per re-plan
 TINY = PushOptions(goal=(0.05, 0.0), period=0.1, horizon=1, budget=0.2, samples=1,
                    settings=StepSettings(dt=0.002))
 
@@ -34,13 +34,15 @@ def test_the_candidates_of_a_replan():
     assert all(p[0].amplitude == GENTLE[0] and p[1].family == "stop" for p in gentle)
     assert all(p[0].frequency > 0 for p in pairs[19:])  # noise keeps the direction of rolling
     assert len(candidates(Primitive("C"), np.random.default_rng(0), 2, near=False)) == 4 + 4 + 2
+    # near but not yet within STILL: the gentle pushes without the stop
+    assert len(candidates(Primitive("C"), np.random.default_rng(0), 2, still=False)) == 4 + 4 + 10 + 2
 
 
 def test_each_period_applies_the_cheapest_candidate(pushed):
     # one re-plan by hand: the chosen primitive is the argmin of the candidates' costs from that state
     assert len(pushed.cycles) == 2
     first = pushed.cycles[0]
-    assert first["rollouts"] == 5 + 4 + 10 + 1 and first["t"] == 0.0  # near the goal: the gentle pushes too
+    assert first["rollouts"] == 4 + 4 + 10 + 1 and first["t"] == 0.0  # 5 cm away: gentle pushes, no stop yet
     assert Primitive(**first["chosen"]) == pushed.plan.primitives[0]
     assert pushed.plan.starts == [0.0, pytest.approx(0.1)]
 

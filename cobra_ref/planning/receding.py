@@ -13,8 +13,9 @@ stepper's memory and the plan so far):
    rolling back (for both, and for one then on again: back to a box the robot rolled past), each
    rolling family at the last choice's amplitude and frequency, ``samples`` copies of the last
    choice with Gaussian noise on amplitude, frequency and taper (predictive sampling; the noise
-   from a generator seeded by ``seed`` and the period's index), and with the box within ``NEAR``
-   of the target a stop and a gentle push (``GENTLE``) of each rolling shape each way, then a stop;
+   from a generator seeded by ``seed`` and the period's index), with the box within ``NEAR`` of
+   the target a gentle push (``GENTLE``) of each rolling shape each way, then a stop, and within
+   ``STILL`` a stop;
 2. each candidate is rolled out over the horizon from that state (through the executor, the
    candidates in batches advanced together: ``replan_batched``), and costs, in metres
    (``candidate_cost``)::
@@ -64,7 +65,8 @@ from .primitives import ROLLING, PlanReference, Primitive
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
 ROLLOUT_BATCHES = 2  # a re-plan's candidates go to the executor as this many batches (``replan_batched``)
-NEAR = 0.05  # [m] a stop for the whole horizon is a candidate only with the box this near its target
+NEAR = 0.05  # [m] the gentle pushes are candidates only with the box this near its target
+STILL = 0.02  # [m] and a stop for the whole horizon only this near (farther, a stop stalls the push)
 PLANTS = ("cobra_ref", "mujoco")
 GENTLE = (0.25, 0.25)  # [rad, Hz] amplitude and frequency of the gentle pushes among the candidates
 
@@ -122,14 +124,15 @@ class PushOptions:
         return self.settings if self.plant_dt is None else replace(self.settings, dt=self.plant_dt)
 
 
-def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: bool = True) -> list:
+def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: bool = True,
+               still: bool = True) -> list:
     """The candidate pairs (first period, the rest of the horizon) of one re-plan from the last
-    rolling primitive ``moving`` (module docstring); a stop for the whole horizon and the gentle
-    pushes only when the box is ``near`` its target (far from it, standing still would always be a
-    safe choice and the push would stall)."""
+    rolling primitive ``moving`` (module docstring); the gentle pushes only when the box is
+    ``near`` its target, and a stop for the whole horizon only when it is ``still`` nearer (farther,
+    standing still would often look the safest choice and the push would stall)."""
     stop, back = Primitive("stop"), replace(moving, frequency=-moving.frequency)
     # rolling back (and then on again) brings the robot back to a box it has rolled past
-    out = [(moving, moving), (moving, stop), (back, back), (back, moving)] + ([(stop, stop)] if near else [])
+    out = [(moving, moving), (moving, stop), (back, back), (back, moving)] + ([(stop, stop)] if near and still else [])
     out += [(p, p) for p in (replace(moving, family=f) for f in ROLLING) if p != moving]
     if near:  # a gentle push of every rolling shape, each way, then a stop: the small corrections near the target
         out += [(g, stop) for g in (Primitive(f, GENTLE[0], sign * GENTLE[1], moving.taper) for f in ROLLING
@@ -267,7 +270,8 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
             if turning:  # the robot faces away from the target: it turns where it stands first
                 pairs = turning_candidates(phi)
             else:
-                pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=distance() <= NEAR)
+                pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=distance() <= NEAR,
+                                   still=distance() <= STILL)
             best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, turning), executor)
             last = pairs[best][0]
             moving = last if last.family in ROLLING else moving
