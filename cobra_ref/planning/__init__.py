@@ -4,6 +4,11 @@ The wing is read in this order: ``problem`` (decision vector, bounds, goal, the 
 rollout), ``cost`` (the cost of a rollout), ``search`` (compass search or differential evolution,
 run on any executor), ``results`` (the params JSON and its replay), ``checkpoint`` (the params
 JSON written as the search goes).
+
+The closed loop (``cobra-ref push``) is read after it: ``primitives`` (the per-period motion
+primitives and the joint reference they chain into), ``locomotion`` (where each primitive takes the
+robot alone), ``facing`` (which way the robot can push the box, and the turns that face it towards
+the target), ``receding`` (the receding-horizon planner), ``benchmark`` (its goals around the box).
 """
 
 from ..infra.executors import SerialExecutor
