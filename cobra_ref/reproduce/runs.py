@@ -294,6 +294,12 @@ def _run_in_worker(specs: list, queue=None, placement=None):
     return simulate_specs(specs, report, placement)
 
 
+def batch_size(runs: int, workers: int | None) -> int:
+    """The batch size for ``runs`` runs on ``workers`` workers (None: unknown, an executor's):
+    ``BATCH_SIZE``, or fewer so that every worker gets a batch."""
+    return BATCH_SIZE if not workers else max(1, min(BATCH_SIZE, -(-runs // workers)))
+
+
 def batches(specs, size: int = BATCH_SIZE) -> list:
     """``specs`` in batches of at most ``size`` runs that share a ``batch_key``, in the order of
     each key's first run (the longest runs first stay first)."""
@@ -357,23 +363,23 @@ def _run_todo(todo, cache_dir: str, workers, progress: bool, executor, stored: l
     elif workers > 1 and len(todo) > 1:
         # the workers and the progress queue's server end at once on an interrupt (executors)
         with progress_queue() as queue, own_pool(min(workers, len(todo))) as pool:
-            _run_on(pool, todo, cache_dir, progress, queue, stored)
+            _run_on(pool, todo, cache_dir, progress, queue, stored, batch_size(len(todo), workers))
     else:
         for i, s in enumerate(todo):
             label = f"  run {i + 1}/{len(todo)} {s.label()}"
             stored.append(store(s, cache_dir, *simulate_spec(s, progress_printer(label) if progress else None)))
 
 
-def _run_on(executor, todo, cache_dir: str, progress: bool, queue, stored: list) -> None:
-    """Submit every spec of ``todo`` to ``executor`` in ``batches`` (one task each), store each
-    result as its batch completes, report progress.
+def _run_on(executor, todo, cache_dir: str, progress: bool, queue, stored: list, size: int = BATCH_SIZE) -> None:
+    """Submit every spec of ``todo`` to ``executor`` in ``batches`` of at most ``size`` (one task
+    each), store each result as its batch completes, report progress.
 
     Sidewinding's members wait for their nominal run when it is in ``todo`` too, and start from
     the placement it recorded: its box-free placement run is then made once, not in every worker.
     """
     nominal = {s for s in todo if s.member is None}
     held = [s for s in todo if s.travels and s.member is not None and replace(s, member=None) in nominal]
-    futures = {executor.submit(_run_in_worker, b, queue): b for b in batches([s for s in todo if s not in held])}
+    futures = {executor.submit(_run_in_worker, b, queue): b for b in batches([s for s in todo if s not in held], size)}
     watcher = _Progress(todo, progress, queue)
     pending = set(futures)
     try:
@@ -388,7 +394,7 @@ def _run_on(executor, todo, cache_dir: str, progress: bool, queue, stored: list)
                     if ready:
                         placement = _recorded_placement(traj)
                         held = [s for s in held if s not in ready]
-                        for b in batches(ready):
+                        for b in batches(ready, size):
                             started = executor.submit(_run_in_worker, b, queue, placement)
                             futures[started] = b
                             pending.add(started)
