@@ -26,7 +26,8 @@ def add_parsers(sub) -> None:
         "push", help="push the box to a point, re-planning every period (receding horizon)",
         description="Push the box to a goal (through waypoints): every PERIOD seconds, from the state reached, "
                     "roll out candidate primitives (rolling shapes with amplitude, frequency and taper, a "
-                    "stop, and turns where the robot stands while it faces away from the goal) over HORIZON periods, apply the best for one period, repeat; see "
+                    "stop, and turns where the robot stands while it faces away from the goal) over HORIZON "
+                    "periods, apply the best for one period, repeat; see "
                     "cobra_ref/planning/receding.py and docs/planning.md. One progress line per period on stderr, "
                     "one JSON line on stdout. OUT holds the executed run (an NPZ like simulate's); PLAN the chosen "
                     "primitives (a JSON that replays to the same run, bit for bit). Ctrl-C keeps what was executed.")

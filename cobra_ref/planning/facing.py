@@ -26,25 +26,29 @@ from .primitives import Primitive
 FACE_TOL = np.radians(25.0)  # [rad] a re-plan turns the robot while |phi| exceeds this
 TURN_FREQUENCY = 1.0  # [Hz] one sidewinding cycle per period of 1 s
 TURN_AMPLITUDES = (0.3, 0.5)  # [rad] the turning candidates' amplitudes
+W_APPROACH = 1.0  # [m per m] a turn's weight of the pushing distance: it must end with the box in reach
 
 
 def push_direction(model, q) -> np.ndarray:
     """n (2,): the unit direction across the body axis towards the box (module docstring)."""
-    points = link_centres(model, q)
-    box = model.boxes[0].body
+    return _push_direction(link_centres(model, q), model.boxes[0].body)
+
+
+def facing(model, q, target) -> float:
+    """phi [rad]: the angle from the push direction n to the box's way to ``target`` (module docstring)."""
+    points, box = link_centres(model, q), model.boxes[0].body
+    n = _push_direction(points, box)
+    way = np.asarray(target, dtype=float) - points[box]
+    return float(np.arctan2(n[0] * way[1] - n[1] * way[0], n @ way))
+
+
+def _push_direction(points: np.ndarray, box: int) -> np.ndarray:
+    """n of the bodies' centres ``points`` (nb, 2), the box's at row ``box``."""
     robot = np.delete(points, box, axis=0)
     a = body_axis(robot)
     r = np.array([a[1], -a[0]])
     nearest = robot[np.argmin(np.linalg.norm(robot - points[box], axis=1))]
     return r if (points[box] - nearest) @ r >= 0 else -r
-
-
-def facing(model, q, target) -> float:
-    """phi [rad]: the angle from the push direction n to the box's way to ``target`` (module docstring)."""
-    n = push_direction(model, q)
-    box = model.boxes[0].body
-    way = np.asarray(target, dtype=float) - link_centres(model, q)[box]
-    return float(np.arctan2(n[0] * way[1] - n[1] * way[0], n @ way))
 
 
 def turning_candidates(phi: float) -> list:

@@ -28,8 +28,8 @@ stepper's memory and the plan so far):
    facing away cannot push off, and vanishes with d; weight ``w_face``); a: the distance from the robot's nearest
    body centre to the pushing point, behind the box on the line from the target through the box's
    centre, a box half-size plus a link radius out (where a pusher must be to push the box towards
-   the target, as in pusher-slider planning; weight ``w_approach``, and 1 for a turn, which must
-   end with the box in reach); E, I, P_tau the shooting cost's effort, impact and torque-limit
+   the target, as in pusher-slider planning; weight ``w_approach``, and ``facing.W_APPROACH`` for a
+   turn, which must end with the box in reach); E, I, P_tau the shooting cost's effort, impact and torque-limit
    terms (:mod:`cobra_ref.planning.cost`) over the horizon;
 3. the best candidate's first primitive is appended to the plan and the plant runs one period.
 
@@ -53,14 +53,14 @@ from ..infra.executors import SerialExecutor
 from ..infra.validation import RULES
 from ..params import CobraParameters
 from ..provenance import code_version
-from ..kinematics import forward_kinematics
 from ..robots import cobra_model
 from ..batch import BatchRun
 from ..simulate import Run
 from ..start import initial_state
 from ..step import StepSettings
 from .cost import effort_term, excess_term, impact_term, robot_weight
-from .facing import FACE_TOL, facing, turning_candidates
+from .facing import FACE_TOL, W_APPROACH, facing, turning_candidates
+from .locomotion import link_centres
 from .primitives import ROLLING, PlanReference, Primitive
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
@@ -205,7 +205,7 @@ def _rollout_cost(job: Rollout, traj, model, n_period: int) -> dict:
     effort = effort_term(traj, o.cobra.tau_max, duration)
     impact = impact_term(traj, robot_weight(model), duration)
     p_tau = excess_term(traj, "tau_excess", o.cobra.tau_max, duration)
-    w_a = 1.0 if job.turning else o.w_approach  # a turn must end with the box in reach
+    w_a = W_APPROACH if job.turning else o.w_approach
     approach = pushing_distance(model, traj.q[-1], target, o.cobra) if w_a else 0.0
     # the distance the robot cannot push away as it faces: d (1 + w_face (1 - cos phi))
     faced = d_end * (1 + o.w_face * (1 - np.cos(facing(model, traj.q[-1], target))))
@@ -216,14 +216,11 @@ def _rollout_cost(job: Rollout, traj, model, n_period: int) -> dict:
 
 def pushing_distance(model, q, target, cobra: CobraParameters) -> float:
     """a [m]: the robot's nearest body centre to the pushing point behind the box (module docstring)."""
-    kin = forward_kinematics(model, q)
-    box = model.boxes[0].body
-    centre = kin.o[box][:2]
-    away = centre - np.asarray(target, dtype=float)
+    points, box = link_centres(model, q), model.boxes[0].body
+    away = points[box] - np.asarray(target, dtype=float)
     u = away / max(float(np.linalg.norm(away)), 1e-9)  # from the target through the box
-    point = centre + u * (cobra.box_size / 2 + cobra.radius_link)
-    robot = [i for i in range(model.nb) if i != box]
-    return float(min(np.linalg.norm(kin.o[i][:2] + (kin.R[i] @ model.com[i])[:2] - point) for i in robot))
+    point = points[box] + u * (cobra.box_size / 2 + cobra.radius_link)
+    return float(np.min(np.linalg.norm(np.delete(points, box, axis=0) - point, axis=1)))
 
 
 @dataclass
@@ -265,13 +262,13 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
 
     try:
         for k in range(n_budget):
-            t, phi = run.t, facing(model, run.q, targets[aim])
-            turning = bool(abs(phi) > FACE_TOL and distance() > NEAR)
+            t, phi, d0 = run.t, facing(model, run.q, targets[aim]), distance()
+            turning = bool(abs(phi) > FACE_TOL and d0 > NEAR)
             if turning:  # the robot faces away from the target: it turns where it stands first
                 pairs = turning_candidates(phi)
             else:
-                pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=distance() <= NEAR,
-                                   still=distance() <= STILL)
+                pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=d0 <= NEAR,
+                                   still=d0 <= STILL)
             best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, turning), executor)
             last = pairs[best][0]
             moving = last if last.family in ROLLING else moving
