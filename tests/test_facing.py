@@ -5,7 +5,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from cobra_ref.planning.facing import FACE_TOL, facing, push_direction, turning_candidates
+from cobra_ref.planning.facing import (FACE_TOL, STEER_TOL, facing, miss, push_direction, steering_candidates,
+                                       turning_candidates)
+from cobra_ref.planning.primitives import Primitive
 from cobra_ref.planning.locomotion import body_axis, link_centres
 from cobra_ref.robots import cobra_model, neutral_q
 
@@ -30,14 +32,32 @@ def test_the_push_direction_is_across_the_axis_towards_the_box(side):
     np.testing.assert_allclose(push_direction(model, q), np.sign(side) * r, atol=1e-12)
 
 
+def _target(model, q, r, degrees: float, distance: float = 0.3):
+    """A target ``distance`` from the box at ``degrees`` counter-clockwise from r."""
+    box = link_centres(model, q)[model.boxes[0].body]
+    c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
+    return box + distance * np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]])
+
+
 @pytest.mark.parametrize("degrees", [0.0, 45.0, -45.0, 120.0, 180.0])
 def test_the_facing_error_is_the_angle_from_the_push_direction_to_the_target(degrees):
     # the box 0.2 m to the right; the target 0.3 m from the box at `degrees` counter-clockwise from r
     model, q, r = _straight_robot_and_box(0.2)
-    box = link_centres(model, q)[model.boxes[0].body]
-    c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
-    target = box + 0.3 * np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]])
-    assert np.degrees(facing(model, q, target)) == pytest.approx(degrees, abs=1e-9)
+    assert np.degrees(facing(model, q, _target(model, q, r, degrees))) == pytest.approx(degrees, abs=1e-9)
+
+
+@pytest.mark.parametrize("degrees, factor", [
+    (0.0, 1.0),  # on the push line: the distance itself
+    (45.0, np.sqrt(0.5 + 9 * 0.5)),  # half of d^2 along, half across (weighted by 3^2)
+    (-60.0, np.sqrt(0.25 + 9 * 0.75)),
+    (90.0, 3.0), (135.0, 3.0), (180.0, 3.0),  # no straight push brings the box nearer: 3 d
+])
+def test_the_miss_weights_the_distance_across_the_push_direction(degrees, factor):
+    # the box 0.2 m to the right, the target 0.3 m from it: m = 0.3 sqrt(cos^2 + 3^2 sin^2) ahead, 0.9 behind
+    model, q, r = _straight_robot_and_box(0.2)
+    target = _target(model, q, r, degrees)
+    assert miss(model, q, target, w_lateral=3.0) == pytest.approx(0.3 * factor, rel=1e-12)
+    assert miss(model, q, target, w_lateral=1.0) == pytest.approx(0.3, rel=1e-12)  # unweighted: d at any angle
 
 
 def test_turning_candidates_turn_the_way_the_target_lies():
@@ -48,6 +68,15 @@ def test_turning_candidates_turn_the_way_the_target_lies():
     assert {p.family for pair in right for p in pair} == {"sidewinding"}
     assert all(a.frequency == -b.frequency and a.amplitude == b.amplitude for a, b in left)
     assert len(left) == 4 and len({pair for pair in left}) == 4
+
+
+def test_a_push_offers_a_turn_first_only_when_the_box_is_off_its_line():
+    # within STEER_TOL nothing; beyond it one period of the small turn towards phi, each way, then the push
+    push = Primitive("C", 0.4, 0.5)
+    assert steering_candidates(0.9 * STEER_TOL, push) == [] and steering_candidates(-0.9 * STEER_TOL, push) == []
+    left, right = steering_candidates(1.1 * STEER_TOL, push), steering_candidates(-1.1 * STEER_TOL, push)
+    assert [p.family for p, _ in left] == ["sidewinding-mirror"] * 2 and [p.family for p, _ in right] == ["sidewinding"] * 2
+    assert sorted(p.frequency for p, _ in left) == [-1.0, 1.0] and all(rest == push for _, rest in left + right)
 
 
 def test_a_replan_turns_the_robot_while_it_faces_away_from_the_target():

@@ -191,6 +191,7 @@ def test_a_plant_at_a_finer_dt_executes_the_plan_and_replays_it():
 
 def test_mujoco_as_the_plant_executes_the_plan_and_replays_it():
     # the planner predicts with cobra_ref (2 ms), MuJoCo executes at its 0.05 ms step and is read back
+    # every plant step (1 ms: 100 in the 0.1 s budget)
     pytest.importorskip("mujoco")
     from dataclasses import replace
 
@@ -198,7 +199,7 @@ def test_mujoco_as_the_plant_executes_the_plan_and_replays_it():
 
     options = replace(TINY, plant="mujoco", budget=0.1)
     result = push(options, SerialExecutor(), plant=MujocoPlant)
-    assert result.trajectory.meta["plant"] == "mujoco" and len(result.trajectory.tau) == 50
+    assert result.trajectory.meta["plant"] == "mujoco" and len(result.trajectory.tau) == 100
     assert np.isfinite(result.trajectory.q).all()
     again = replay(result.plan.to_dict(), options, plant=MujocoPlant)
     np.testing.assert_array_equal(again.q, result.trajectory.q)

@@ -11,7 +11,7 @@ import os
 import sys
 
 from ..infra.executors import SerialExecutor, own_pool
-from ..infra.validation import DEFAULT_DT, RULES
+from ..infra.validation import RULES
 from ..mjcf import TIMESTEP
 from .common import (add_model_options, c_stdout_silenced, check_out, fail, interrupted_exit, model_parameters,
                      say_interrupted, write_text_atomic)
@@ -47,14 +47,14 @@ def add_parsers(sub) -> None:
     p.add_argument("--tolerance", type=RULES["push_tolerance"].arg("--tolerance"), default=d.tolerance,
                    help=f"the push ends with the box within this of the goal [m] (default {d.tolerance:g})")
     p.add_argument("--seed", type=RULES["seed"].arg("--seed"), default=0, help="seed of the sampling noise (default 0)")
-    p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=DEFAULT_DT,
-                   help=f"time step of the rollouts, and of the plant unless --plant-dt [s] (default {DEFAULT_DT * 1e3:g} ms)")
+    p.add_argument("--dt", type=RULES["dt"].arg("--dt"), default=d.settings.dt,
+                   help=f"time step of the rollouts [s] (default {d.settings.dt * 1e3:g} ms)")
     p.add_argument("--plant", choices=("cobra_ref", "mujoco"), default="cobra_ref",
                    help="what executes the plan: cobra_ref (default) or MuJoCo on the exported model at its "
                         f"{TIMESTEP * 1e3:g} ms step (the planner still predicts with cobra_ref; the state is read back every period)")
-    p.add_argument("--plant-dt", type=RULES["dt"].arg("--plant-dt"), default=None,
-                   help="time step of the plant that executes the plan [s] (default: --dt), e.g. 0.0005: the plan "
-                        "then runs in a finer world than the one it was predicted in")
+    p.add_argument("--plant-dt", type=RULES["dt"].arg("--plant-dt"), default=d.plant_dt,
+                   help=f"time step of the plant that executes the plan [s] (default {d.plant_dt * 1e3:g} ms, the "
+                        "figures'), e.g. 0.0005: the plan then runs in a finer world than the one it was predicted in")
     add_model_options(p)
     p.add_argument("--workers", type=RULES["workers"].arg("--workers"), default=None,
                    help="worker processes for the rollouts (default: the cores; 1 = serial, in this process)")

@@ -8,11 +8,24 @@ direction and the facing error phi to the target T::
     n     = sign((B - p) . r) r       p: the robot's link centre nearest the box centre B
     phi   = the angle from n to T - B, counter-clockwise, in (-pi, pi]
 
+Pushing straight on along n brings the box at best to d |sin phi| of T (d = |T - B|): that lateral
+miss is what the robot must turn to remove, and the nearer the box comes the larger the turn it
+takes (a 3 cm miss is 9 deg of phi 20 cm out, 85 deg at 3 cm). The re-plan's cost therefore measures
+the box's distance with the lateral part weighted by w_l >= 1 (``miss``)::
+
+    m = sqrt(max(d cos phi, 0)^2 + w_l^2 (d^2 sin^2 phi + min(d cos phi, 0)^2))
+
+which is d when the box lies on the push line ahead of T, and w_l d when no straight push brings it
+nearer (|phi| >= 90 deg); for small phi it grows like d (1 + w_l^2 phi^2 / 2), which makes the planner
+steer the box back onto the line while a small turn still does it.
+
 Rolling shapes push within about 30 deg of n (C, J and J-mirror push the box at -32 to +32 deg of
 the robot's heading), so for |phi| above ``FACE_TOL`` the planner turns the robot first. It turns
 where it stands with sidewinding: sidewinding turns clockwise whether it winds forwards or backwards,
 its mirror counter-clockwise, so forwards then backwards turns it with little travel (measured in
-docs/planning.md). Turning about a point near the box turns n with a; it cannot bring the robot to the
+docs/planning.md). Between ``STEER_TOL`` and ``FACE_TOL`` a pushing re-plan also offers one period of
+the smaller turn before the push goes on (``steering_candidates``): a lateral miss corrected while
+the box is still far. Turning about a point near the box turns n with a; it cannot bring the robot to the
 box's other side (|phi| near 180 deg stays so).
 """
 
@@ -24,8 +37,10 @@ from .locomotion import body_axis, link_centres
 from .primitives import Primitive
 
 FACE_TOL = np.radians(25.0)  # [rad] a re-plan turns the robot while |phi| exceeds this
+STEER_TOL = np.radians(8.0)  # [rad] above this a pushing re-plan also offers a turn before the push
 TURN_FREQUENCY = 1.0  # [Hz] one sidewinding cycle per period of 1 s
 TURN_AMPLITUDES = (0.3, 0.5)  # [rad] the turning candidates' amplitudes
+W_LATERAL = 3.0  # [m per m] the lateral miss's weight in ``miss`` (a default of ``PushOptions.w_lateral``)
 W_APPROACH = 1.0  # [m per m] a turn's weight of the pushing distance: it must end with the box in reach
 
 
@@ -36,10 +51,22 @@ def push_direction(model, q) -> np.ndarray:
 
 def facing(model, q, target) -> float:
     """phi [rad]: the angle from the push direction n to the box's way to ``target`` (module docstring)."""
-    points, box = link_centres(model, q), model.boxes[0].body
+    return _facing(link_centres(model, q), model.boxes[0].body, target)[0]
+
+
+def miss(model, q, target, w_lateral: float = W_LATERAL) -> float:
+    """m [m]: the box's distance to ``target`` with its part across the push direction weighted by
+    ``w_lateral`` (module docstring)."""
+    phi, d = _facing(link_centres(model, q), model.boxes[0].body, target)
+    along, lateral = d * np.cos(phi), d * np.sin(phi)
+    return float(np.hypot(max(along, 0.0), w_lateral * np.hypot(lateral, min(along, 0.0))))
+
+
+def _facing(points: np.ndarray, box: int, target) -> tuple[float, float]:
+    """(phi, d) of the bodies' centres ``points`` (nb, 2), the box's at row ``box``."""
     n = _push_direction(points, box)
     way = np.asarray(target, dtype=float) - points[box]
-    return float(np.arctan2(n[0] * way[1] - n[1] * way[0], n @ way))
+    return float(np.arctan2(n[0] * way[1] - n[1] * way[0], n @ way)), float(np.linalg.norm(way))
 
 
 def _push_direction(points: np.ndarray, box: int) -> np.ndarray:
@@ -61,3 +88,13 @@ def turning_candidates(phi: float) -> list:
         ahead, back = Primitive(family, amplitude, TURN_FREQUENCY), Primitive(family, amplitude, -TURN_FREQUENCY)
         out += [(ahead, back), (back, ahead)]
     return out
+
+
+def steering_candidates(phi: float, moving: Primitive) -> list:
+    """The pairs a pushing re-plan adds for the facing error ``phi`` (|phi| > ``STEER_TOL``): one
+    period of the turn towards phi at the smaller of ``TURN_AMPLITUDES``, forwards and backwards,
+    then the push ``moving`` for the rest of the horizon."""
+    if abs(phi) <= STEER_TOL:
+        return []
+    family = "sidewinding-mirror" if phi > 0 else "sidewinding"
+    return [(Primitive(family, TURN_AMPLITUDES[0], sign * TURN_FREQUENCY), moving) for sign in (1, -1)]

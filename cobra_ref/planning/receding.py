@@ -6,26 +6,30 @@ period T_p (``PushOptions.period``), from the state the run has reached (the pla
 stepper's memory and the plan so far):
 
 1. candidates: while the robot faces away from the target (its facing error |phi| above
-   ``facing.FACE_TOL``, the box farther than ``NEAR`` from the target), turns where it stands
-   (``facing.turning_candidates``); otherwise pairs of primitives (``candidates``;
+   ``facing.FACE_TOL``, the box farther than ``STILL`` from the target), turns where it stands
+   (``facing.turning_candidates``), with the box within ``NEAR`` the gentle pushes too; otherwise pairs of primitives (``candidates``;
    :mod:`cobra_ref.planning.primitives`), one for the next period and one for the rest of the
    horizon: the last rolling choice continued (the warm start), the same then a stop, the same
    rolling back (for both, and for one then on again: back to a box the robot rolled past), each
    rolling family at the last choice's amplitude and frequency, ``samples`` copies of the last
    choice with Gaussian noise on amplitude, frequency and taper (predictive sampling; the noise
-   from a generator seeded by ``seed`` and the period's index), with the box within ``NEAR`` of
+   from a generator seeded by ``seed`` and the period's index), with |phi| above
+   ``facing.STEER_TOL`` one period of a small turn towards the target before the push
+   (``facing.steering_candidates``), with the box within ``NEAR`` of
    the target a gentle push (``GENTLE``) of each rolling shape each way, then a stop, and within
    ``STILL`` a stop;
 2. each candidate is rolled out over the horizon from that state (through the executor, the
    candidates in batches advanced together: ``replan_batched``), and costs, in metres
    (``candidate_cost``)::
 
-       J = d(t + H T_p) (1 + w_f (1 - cos phi)) + d(t + T_p) / 2 + w_a a(t + H T_p)
+       J = m(t + H T_p) (1 + w_f (1 - cos phi)) + d(t + T_p) / 2 + w_a a(t + H T_p)
            + w_e E + w_I I + w_tau P_tau
 
-   d: the box centre's horizontal distance to the current target; phi: the robot's facing error at
-   the horizon's end (:mod:`cobra_ref.planning.facing`; the factor counts the distance a robot
-   facing away cannot push off, and vanishes with d; weight ``w_face``); a: the distance from the robot's nearest
+   d: the box centre's horizontal distance to the current target; m: that distance with its part
+   across the robot's push direction weighted by ``w_lateral`` at the horizon's end
+   (``facing.miss``: a straight push cannot remove it); phi: the robot's facing error there
+   (:mod:`cobra_ref.planning.facing`; the factor, weight ``w_face``, 0 by default, counts the
+   distance a robot facing away cannot push off, and vanishes with d); a: the distance from the robot's nearest
    body centre to the pushing point, behind the box on the line from the target through the box's
    centre, a box half-size plus a link radius out (where a pusher must be to push the box towards
    the target, as in pusher-slider planning; weight ``w_approach``, and ``facing.W_APPROACH`` for a
@@ -33,7 +37,8 @@ stepper's memory and the plan so far):
    terms (:mod:`cobra_ref.planning.cost`) over the horizon;
 3. the best candidate's first primitive is appended to the plan and the plant runs one period.
 
-The plant may run at another time step than the rollouts (``plant_dt``: the plan must not be
+The plant runs at another time step than the rollouts: by default the figures' 1 ms
+(``PLANT_DT``), the rollouts 2 ms (``ROLLOUT_DT``, half the cost of a re-plan; the plan must not be
 tuned to its own model). The target is the next waypoint until the box passes within ``via_tolerance`` of it, then the goal.
 The push ends when the box is within ``tolerance`` of the goal at the end of a period in which
 the robot stopped (the box at rest), or when the budget of simulated time is spent. The plant is
@@ -50,7 +55,7 @@ import numpy as np
 
 from ..infra import arguments
 from ..infra.executors import SerialExecutor
-from ..infra.validation import RULES
+from ..infra.validation import DEFAULT_DT, RULES
 from ..params import CobraParameters
 from ..provenance import code_version
 from ..robots import cobra_model
@@ -59,7 +64,7 @@ from ..simulate import Run
 from ..start import initial_state
 from ..step import StepSettings
 from .cost import effort_term, excess_term, impact_term, robot_weight
-from .facing import FACE_TOL, W_APPROACH, facing, turning_candidates
+from .facing import FACE_TOL, W_APPROACH, W_LATERAL, facing, miss, steering_candidates, turning_candidates
 from .locomotion import link_centres
 from .primitives import ROLLING, PlanReference, Primitive
 
@@ -69,6 +74,8 @@ NEAR = 0.05  # [m] the gentle pushes are candidates only with the box this near 
 STILL = 0.02  # [m] and a stop for the whole horizon only this near (farther, a stop stalls the push)
 PLANTS = ("cobra_ref", "mujoco")
 GENTLE = (0.25, 0.25)  # [rad, Hz] amplitude and frequency of the gentle pushes among the candidates
+ROLLOUT_DT = 2 * DEFAULT_DT  # [s] the rollouts' time step: the planner predicts in a coarser world than it acts in
+PLANT_DT = DEFAULT_DT  # [s] the plant's: the figures' time step
 
 
 @dataclass(frozen=True)
@@ -85,14 +92,15 @@ class PushOptions:
     samples: int = 6  # noisy copies of the last choice per re-plan
     seed: int = 0
     start: Primitive = Primitive("C", 0.5, 0.5)  # the start shape (the box on its concave side) and first guess
-    settings: StepSettings = field(default_factory=StepSettings)
+    settings: StepSettings = field(default_factory=lambda: StepSettings(dt=ROLLOUT_DT))  # the rollouts'
     cobra: CobraParameters = field(default_factory=CobraParameters)
     w_effort: float = 0.005  # [m] per unit of E
     w_impact: float = 1.0  # [m] per unit of I: claim NI's 1 % of the robot's weight costs 1 cm
     w_tau: float = 0.1  # [m] per unit of P_tau
     w_approach: float = 0.5  # per metre of a (docs/planning.md, "Turning before pushing")
-    w_face: float = 1.0  # the facing factor's weight: the end distance counts d (1 + w_face (1 - cos phi))
-    plant_dt: float | None = None  # [s] the plant's time step (None: the rollouts' settings.dt)
+    w_face: float = 0.0  # the facing factor's weight: the end distance counts m (1 + w_face (1 - cos phi))
+    w_lateral: float = W_LATERAL  # the weight of the end distance's part across the push direction (``facing.miss``)
+    plant_dt: float | None = PLANT_DT  # [s] the plant's time step (None: the rollouts' settings.dt)
     plant: str = "cobra_ref"  # the plant's simulator: "cobra_ref" (``simulate.Run``) or "mujoco" (``push``'s plant=)
 
     def __post_init__(self):
@@ -108,7 +116,7 @@ class PushOptions:
                            ("tolerance", "push_tolerance"), ("via_tolerance", "push_tolerance"),
                            ("samples", "push_samples"), ("seed", "seed"), ("w_effort", "weight"),
                            ("w_impact", "weight"), ("w_tau", "weight"), ("w_approach", "weight"),
-                           ("w_face", "weight")):
+                           ("w_face", "weight"), ("w_lateral", "weight")):
             put(name, arguments.number(name, getattr(self, name), RULES[rule]))
         arguments.instance("start", self.start, Primitive, "Primitive('C', 0.5, 0.5)")
         arguments.instance("settings", self.settings, StepSettings, "StepSettings(dt=0.001)")
@@ -135,12 +143,17 @@ def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: 
     out = [(moving, moving), (moving, stop), (back, back), (back, moving)] + ([(stop, stop)] if near and still else [])
     out += [(p, p) for p in (replace(moving, family=f) for f in ROLLING) if p != moving]
     if near:  # a gentle push of every rolling shape, each way, then a stop: the small corrections near the target
-        out += [(g, stop) for g in (Primitive(f, GENTLE[0], sign * GENTLE[1], moving.taper) for f in ROLLING
-                                    for sign in (1, -1))]
+        out += gentle(moving)
     for _ in range(samples):
         noisy = _perturbed(moving, rng)
         out.append((noisy, noisy))
     return out
+
+
+def gentle(moving: Primitive) -> list:
+    """The gentle pushes (``GENTLE``) of every rolling shape each way at ``moving``'s taper, each then a stop."""
+    return [(Primitive(f, GENTLE[0], sign * GENTLE[1], moving.taper), Primitive("stop")) for f in ROLLING
+            for sign in (1, -1)]
 
 
 def _perturbed(p: Primitive, rng: np.random.Generator) -> Primitive:
@@ -207,8 +220,10 @@ def _rollout_cost(job: Rollout, traj, model, n_period: int) -> dict:
     p_tau = excess_term(traj, "tau_excess", o.cobra.tau_max, duration)
     w_a = W_APPROACH if job.turning else o.w_approach
     approach = pushing_distance(model, traj.q[-1], target, o.cobra) if w_a else 0.0
-    # the distance the robot cannot push away as it faces: d (1 + w_face (1 - cos phi))
-    faced = d_end * (1 + o.w_face * (1 - np.cos(facing(model, traj.q[-1], target))))
+    # the distance with its lateral part weighted, times the facing factor: m (1 + w_face (1 - cos phi))
+    faced = miss(model, traj.q[-1], target, o.w_lateral)
+    if o.w_face:
+        faced *= 1 + o.w_face * (1 - np.cos(facing(model, traj.q[-1], target)))
     cost = (faced + 0.5 * d_mid + w_a * approach + o.w_effort * effort + o.w_impact * impact
             + o.w_tau * p_tau)
     return {"cost": cost, "distance": d_end, "box": traj.box_pose[-1, :2].tolist(), "error": None}
@@ -263,12 +278,12 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     try:
         for k in range(n_budget):
             t, phi, d0 = run.t, facing(model, run.q, targets[aim]), distance()
-            turning = bool(abs(phi) > FACE_TOL and d0 > NEAR)
+            turning = bool(abs(phi) > FACE_TOL and d0 > STILL)
             if turning:  # the robot faces away from the target: it turns where it stands first
-                pairs = turning_candidates(phi)
+                pairs = turning_candidates(phi) + (gentle(moving) if d0 <= NEAR else [])
             else:
                 pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=d0 <= NEAR,
-                                   still=d0 <= STILL)
+                                   still=d0 <= STILL) + steering_candidates(phi, moving)
             best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, turning), executor)
             last = pairs[best][0]
             moving = last if last.family in ROLLING else moving
@@ -344,7 +359,7 @@ def push_record(result: PushResult, options: PushOptions) -> dict:
                         "start": o.start.to_dict(), "settings": asdict(o.settings), "plant_dt": o.plant_dt, "plant": o.plant,
                         "cobra": asdict(o.cobra),
                         "weights": {"effort": o.w_effort, "impact": o.w_impact, "tau": o.w_tau,
-                                    "approach": o.w_approach, "face": o.w_face}},
+                                    "approach": o.w_approach, "face": o.w_face, "lateral": o.w_lateral}},
             "plan": result.plan.to_dict(), "cycles": result.cycles, "goal_world": list(result.goal_world),
             "reached": result.reached, "reason": result.reason, "final_distance": final,
             "simulated_time": traj.duration,
@@ -364,6 +379,7 @@ def load_push(record: dict) -> tuple[dict, PushOptions]:
                           start=Primitive(**o["start"]), settings=StepSettings(**o["settings"]), cobra=cobra,
                           w_effort=o["weights"]["effort"], w_impact=o["weights"]["impact"], w_tau=o["weights"]["tau"],
                           w_approach=o["weights"]["approach"], w_face=o["weights"].get("face", 0.0),
+                          w_lateral=o["weights"].get("lateral", 1.0),
                           plant_dt=o.get("plant_dt"),
                           plant=o.get("plant", "cobra_ref"))
     return record["plan"], options
