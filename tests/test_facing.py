@@ -5,7 +5,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from cobra_ref.planning.facing import (FACE_TOL, STEER_TOL, facing, miss, push_direction, steering_candidates,
+from cobra_ref.planning.facing import (FACE_TOL, RECOVERY_BACK, RECOVERY_TURNS, STEER_TOL, TURN_AMPLITUDES, away,
+                                       facing, miss, push_direction, recovery_candidates, steering_candidates,
                                        turning_candidates)
 from cobra_ref.planning.primitives import Primitive
 from cobra_ref.planning.locomotion import body_axis, link_centres
@@ -93,3 +94,49 @@ def test_a_replan_turns_the_robot_while_it_faces_away_from_the_target():
     assert all(c["pair"][0].startswith("sidewinding-mirror") for c in first["candidates"])
     ahead = push(replace(TINY, goal=(0.2, 0.0), budget=0.1), SerialExecutor())
     assert ahead.cycles[0]["mode"] == "push" and abs(ahead.cycles[0]["facing"]) < np.degrees(FACE_TOL)
+
+
+@pytest.mark.parametrize("side, sign", [(0.2, -1.0), (-0.2, 1.0)])
+def test_c_backs_away_from_the_box_at_the_sign_away_gives(side, sign):
+    # C at f > 0 travels towards r (tests/test_locomotion.py measures it): away from a box on the right is f < 0
+    model, q, _ = _straight_robot_and_box(side)
+    assert away(model, q) == sign
+
+
+def test_a_recovery_backs_off_turns_towards_the_target_rolls_back_and_pushes_gently():
+    sequences = recovery_candidates(0.5, -1.0)  # the target to the left of the push direction, the box on the right
+    assert len(sequences) == len(RECOVERY_BACK) * len(TURN_AMPLITUDES) * len(RECOVERY_TURNS)
+    for seq in sequences:
+        back, *turns, again, gentle, stop = seq
+        assert back.family == again.family == gentle.family == "C" and back.frequency < 0 < again.frequency
+        assert again.frequency == -back.frequency and 0 < gentle.frequency <= again.frequency and stop.family == "stop"
+        assert gentle.amplitude < again.amplitude
+        assert {t.family for t in turns} == {"sidewinding-mirror"} and len(turns) in RECOVERY_TURNS
+        assert all(a.frequency == -b.frequency for a, b in zip(turns, turns[1:]))  # forwards, backwards, ...
+    assert {p.family for seq in recovery_candidates(-0.5, -1.0) for p in seq[1:-3]} == {"sidewinding"}
+
+
+@pytest.mark.parametrize("phi, d, stalled, mode", [
+    (0.5, 0.03, True, "recover"),  # stalled near the target, the box off the line
+    (0.5, 0.2, True, "turn"),  # stalled, but too far for a recovery: turn where it stands
+    (0.1, 0.03, True, "push"),  # stalled on the line: no turn would help
+    (0.5, 0.03, False, "turn"), (0.5, 0.01, False, "push"),  # within 2 cm nothing but pushes and stops
+    (0.1, 0.2, False, "push"),
+])
+def test_each_replan_chooses_its_mode_from_the_measured_state(phi, d, stalled, mode):
+    from cobra_ref.planning.receding import choose_candidates
+
+    chosen, pairs = choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2, stalled,
+                                      lambda: -1.0)
+    assert chosen == mode and pairs
+    if mode == "recover":
+        assert all(len(seq) >= 5 for seq in pairs)
+        # a recovery runs its periods but the final stop whole: only those that end within the budget
+        shortest = min(len(seq) for seq in pairs) - 1
+        fitting = choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2, stalled,
+                                    lambda: -1.0, shortest)[1]
+        assert fitting and all(len(seq) - 1 <= shortest for seq in fitting)
+        assert choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2, stalled,
+                                 lambda: -1.0, shortest - 1)[0] == "turn"
+    if mode == "turn":
+        assert {pair[0].family for pair in pairs[:4]} == {"sidewinding-mirror"}

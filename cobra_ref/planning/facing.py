@@ -23,7 +23,9 @@ Rolling shapes push within about 30 deg of n (C, J and J-mirror push the box at 
 the robot's heading), so for |phi| above ``FACE_TOL`` the planner turns the robot first. It turns
 where it stands with sidewinding: sidewinding turns clockwise whether it winds forwards or backwards,
 its mirror counter-clockwise, so forwards then backwards turns it with little travel (measured in
-docs/planning.md). Between ``STEER_TOL`` and ``FACE_TOL`` a pushing re-plan also offers one period of
+docs/planning.md). A push stalled near the target with the box off its line (``recovery_candidates``)
+backs off with C (which travels towards r at f > 0, ``away``), turns, rolls back and pushes gently:
+sequences of periods a re-plan compares whole and the plant then runs whole. Between ``STEER_TOL`` and ``FACE_TOL`` a pushing re-plan also offers one period of
 the smaller turn before the push goes on (``steering_candidates``): a lateral miss corrected while
 the box is still far. Turning about a point near the box turns n with a; it cannot bring the robot to the
 box's other side (|phi| near 180 deg stays so).
@@ -40,6 +42,8 @@ FACE_TOL = np.radians(25.0)  # [rad] a re-plan turns the robot while |phi| excee
 STEER_TOL = np.radians(8.0)  # [rad] above this a pushing re-plan also offers a turn before the push
 TURN_FREQUENCY = 1.0  # [Hz] one sidewinding cycle per period of 1 s
 TURN_AMPLITUDES = (0.3, 0.5)  # [rad] the turning candidates' amplitudes
+RECOVERY_BACK = (0.25, 0.5)  # [Hz] the back-off's frequencies (C at 0.4 rad)
+RECOVERY_TURNS = (1, 2, 3)  # periods of turning in a recovery
 W_LATERAL = 3.0  # [m per m] the lateral miss's weight in ``miss`` (a default of ``PushOptions.w_lateral``)
 W_APPROACH = 1.0  # [m per m] a turn's weight of the pushing distance: it must end with the box in reach
 
@@ -98,3 +102,28 @@ def steering_candidates(phi: float, moving: Primitive) -> list:
         return []
     family = "sidewinding-mirror" if phi > 0 else "sidewinding"
     return [(Primitive(family, TURN_AMPLITUDES[0], sign * TURN_FREQUENCY), moving) for sign in (1, -1)]
+
+
+def away(model, q) -> float:
+    """The sign of f with which C rolls the robot away from the box (C at f > 0 travels towards r:
+    :mod:`cobra_ref.planning.locomotion`): -1 with the box on the right (n = r), else +1."""
+    points, box = link_centres(model, q), model.boxes[0].body
+    a = body_axis(np.delete(points, box, axis=0))
+    return -1.0 if _push_direction(points, box) @ np.array([a[1], -a[0]]) > 0 else 1.0
+
+
+def recovery_candidates(phi: float, sign_away: float) -> list:
+    """The sequences (one primitive per period) of a recovery for the facing error ``phi``: C at
+    0.4 rad backs off (frequency ``sign_away`` times each of ``RECOVERY_BACK``), the turn towards phi
+    alternates forwards and backwards for each of ``RECOVERY_TURNS`` periods at each of
+    ``TURN_AMPLITUDES``, the same C rolls back, a gentle C (0.25 rad, 0.25 Hz) pushes, and a stop ends it."""
+    family = "sidewinding-mirror" if phi > 0 else "sidewinding"
+    gentle, stop = Primitive("C", 0.25, -sign_away * 0.25), Primitive("stop")
+    out = []
+    for f in RECOVERY_BACK:
+        back, again = Primitive("C", 0.4, sign_away * f), Primitive("C", 0.4, -sign_away * f)
+        for amplitude in TURN_AMPLITUDES:
+            for k in RECOVERY_TURNS:
+                turns = tuple(Primitive(family, amplitude, TURN_FREQUENCY * (-1) ** i) for i in range(k))
+                out.append((back,) + turns + (again, gentle, stop))
+    return out

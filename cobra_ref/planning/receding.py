@@ -5,7 +5,12 @@ specified point, and corresponding suitable joint commands are derived", closed 
 period T_p (``PushOptions.period``), from the state the run has reached (the plant's q, qd, its
 stepper's memory and the plan so far):
 
-1. candidates: while the robot faces away from the target (its facing error |phi| above
+1. candidates (``choose_candidates``): when the push has stalled (the box moved less than
+   ``STALL_MOVE`` in ``STALL_PERIODS`` periods) within ``RECOVER_WITHIN`` of the target with the box
+   off its line (|phi| above ``facing.STEER_TOL``), recoveries (``facing.recovery_candidates``:
+   back off, turn, roll back, push gently; one primitive per period, each rolled out over its
+   whole length), the chosen one then run whole without re-planning if it ends within the budget;
+   while the robot faces away from the target (its facing error |phi| above
    ``facing.FACE_TOL``, the box farther than ``STILL`` from the target), turns where it stands
    (``facing.turning_candidates``), with the box within ``NEAR`` the gentle pushes too; otherwise pairs of primitives (``candidates``;
    :mod:`cobra_ref.planning.primitives`), one for the next period and one for the rest of the
@@ -64,7 +69,8 @@ from ..simulate import Run
 from ..start import initial_state
 from ..step import StepSettings
 from .cost import effort_term, excess_term, impact_term, robot_weight
-from .facing import FACE_TOL, W_APPROACH, W_LATERAL, facing, miss, steering_candidates, turning_candidates
+from .facing import (FACE_TOL, STEER_TOL, W_APPROACH, W_LATERAL, away, facing, miss, recovery_candidates,
+                     steering_candidates, turning_candidates)
 from .locomotion import link_centres
 from .primitives import ROLLING, PlanReference, Primitive
 
@@ -73,6 +79,8 @@ ROLLOUT_BATCHES = 2  # a re-plan's candidates go to the executor as this many ba
 NEAR = 0.05  # [m] the gentle pushes are candidates only with the box this near its target
 STILL = 0.02  # [m] and a stop for the whole horizon only this near (farther, a stop stalls the push)
 PLANTS = ("cobra_ref", "mujoco")
+STALL_PERIODS, STALL_MOVE = 3, 0.003  # a push has stalled when the box moved less than 3 mm in 3 periods
+RECOVER_WITHIN = 0.1  # [m] a stalled push recovers only this near its target
 GENTLE = (0.25, 0.25)  # [rad, Hz] amplitude and frequency of the gentle pushes among the candidates
 ROLLOUT_DT = 2 * DEFAULT_DT  # [s] the rollouts' time step: the planner predicts in a coarser world than it acts in
 PLANT_DT = DEFAULT_DT  # [s] the plant's: the figures' time step
@@ -171,7 +179,7 @@ class Rollout:
     """What a worker needs for one candidate: the plant's state and plan, the candidate, the target."""
 
     plan: dict  # PlanReference.to_dict() so far
-    pair: tuple  # (Primitive, Primitive)
+    pair: tuple  # (Primitive, ...): one per period, the last for the rest of the horizon
     t: float
     q: np.ndarray
     qd: np.ndarray
@@ -195,14 +203,14 @@ def candidate_costs(jobs: list) -> list:
     plans = []
     for job in jobs:
         plan = PlanReference.from_dict(job.plan)
-        plan.extend(job.pair[0], job.t)
-        plan.extend(job.pair[1], job.t + o.period)
+        for i, p in enumerate(job.pair):  # one primitive per period, the last for the rest of the horizon
+            plan.extend(p, job.t + i * o.period)
         plans.append(plan)
     model = cobra_model(o.cobra)
     n_period = int(round(o.period / o.settings.dt))
-    run = BatchRun(model, o.settings, [(first.q, first.qd)] * len(jobs), n_period * o.horizon, t0=first.t,
-                   memory=first.memory)
-    run.advance(plans, n_period * o.horizon)
+    n = n_period * max([o.horizon] + [len(job.pair) for job in jobs])
+    run = BatchRun(model, o.settings, [(first.q, first.qd)] * len(jobs), n, t0=first.t, memory=first.memory)
+    run.advance(plans, n)
     return [_rollout_cost(job, traj, model, n_period) for job, traj in zip(jobs, run.finish())]
 
 
@@ -270,6 +278,7 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     n_budget = int(round(o.budget / o.period))
     run = _plant(o, plant)(model, settings, q0, qd0, n_period * n_budget)
     cycles, last, moving, aim = [], o.start, o.start, 0
+    boxes, queue, calm = [], [], 0  # the box at each period's start; a recovery's periods to run; periods since one
     start, reason, reached = time.perf_counter(), "budget spent", False
 
     def distance() -> float:  # the box centre to the current target [m]
@@ -278,19 +287,22 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     try:
         for k in range(n_budget):
             t, phi, d0 = run.t, facing(model, run.q, targets[aim]), distance()
-            turning = bool(abs(phi) > FACE_TOL and d0 > STILL)
-            if turning:  # the robot faces away from the target: it turns where it stands first
-                pairs = turning_candidates(phi) + (gentle(moving) if d0 <= NEAR else [])
+            boxes.append(run.q[box:box + 2].copy())
+            stalled = calm >= STALL_PERIODS and np.linalg.norm(boxes[-1] - boxes[-1 - STALL_PERIODS]) < STALL_MOVE
+            if queue:  # the rest of a recovery, run whole
+                mode, pairs, results, best = "recover", [], [{"cost": None}], 0
+                last = queue.pop(0)
             else:
-                pairs = candidates(moving, np.random.default_rng([o.seed, k]), o.samples, near=d0 <= NEAR,
-                                   still=d0 <= STILL) + steering_candidates(phi, moving)
-            best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, turning), executor)
-            last = pairs[best][0]
-            moving = last if last.family in ROLLING else moving
+                mode, pairs = choose_candidates(phi, d0, moving, np.random.default_rng([o.seed, k]), o.samples,
+                                                stalled, lambda: away(model, run.q), n_budget - k)
+                best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, mode == "turn"), executor)
+                last, queue = pairs[best][0], list(pairs[best][1:-1]) if mode == "recover" else []
+            calm = 0 if mode == "recover" else calm + 1
+            moving = last if last.family in ROLLING and mode != "recover" else moving
             plan.extend(last, t)
             run.advance(plan, n_period)
             d = distance()
-            cycles.append({"t": t, "facing": float(np.degrees(phi)), "mode": "turn" if turning else "push",
+            cycles.append({"t": t, "facing": float(np.degrees(phi)), "mode": mode,
                            "chosen": last.to_dict(), "predicted_cost": results[best]["cost"],
                            "distance": d, "target": list(targets[aim]), "rollouts": len(pairs),
                            "wall_time": time.perf_counter() - start,
@@ -309,6 +321,22 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
                                 time.perf_counter() - start)
         raise
     return PushResult(run.finish(), plan, cycles, targets[-1], reached, reason, time.perf_counter() - start)
+
+
+def choose_candidates(phi: float, d: float, moving: Primitive, rng: np.random.Generator, samples: int,
+                      stalled: bool, sign_away, periods_left: int = 10**6) -> tuple[str, list]:
+    """(mode, candidates) of one re-plan (module docstring, step 1) for the facing error ``phi`` and
+    the box's distance ``d`` to the target: "recover" (``facing.recovery_candidates`` that end within
+    ``periods_left``; ``sign_away()`` gives the back-off's sign) when the push has ``stalled`` within
+    ``RECOVER_WITHIN`` with the box off its line, "turn" while the robot faces away, else "push"."""
+    if stalled and STILL < d <= RECOVER_WITHIN and abs(phi) > STEER_TOL:
+        fitting = [seq for seq in recovery_candidates(phi, sign_away()) if len(seq) - 1 <= periods_left]
+        if fitting:  # its periods but the final stop are run whole, so a recovery must fit in the budget
+            return "recover", fitting
+    if abs(phi) > FACE_TOL and d > STILL:  # the robot faces away from the target: it turns where it stands first
+        return "turn", turning_candidates(phi) + (gentle(moving) if d <= NEAR else [])
+    return "push", (candidates(moving, rng, samples, near=d <= NEAR, still=d <= STILL)
+                    + steering_candidates(phi, moving))
 
 
 def replan(jobs: list, predict, executor=None) -> tuple[int, list]:
