@@ -23,12 +23,14 @@ Rolling shapes push within about 30 deg of n (C, J and J-mirror push the box at 
 the robot's heading), so for |phi| above ``FACE_TOL`` the planner turns the robot first. It turns
 where it stands with sidewinding: sidewinding turns clockwise whether it winds forwards or backwards,
 its mirror counter-clockwise, so forwards then backwards turns it with little travel (measured in
-docs/planning.md). A push stalled near the target with the box off its line (``recovery_candidates``)
-backs off with C (which travels towards r at f > 0, ``away``), turns, rolls back and pushes gently:
-sequences of periods a re-plan compares whole and the plant then runs whole. Between ``STEER_TOL`` and ``FACE_TOL`` a pushing re-plan also offers one period of
-the smaller turn before the push goes on (``steering_candidates``): a lateral miss corrected while
-the box is still far. Turning about a point near the box turns n with a; it cannot bring the robot to the
-box's other side (|phi| near 180 deg stays so).
+docs/planning.md). Such a turn turns n with a; only the turn's drift, or the box swept by the body,
+can bring the box to the robot's other side.
+
+Between ``STEER_TOL`` and ``FACE_TOL`` a pushing re-plan also offers one period of the smaller turn
+before the push goes on (``steering_candidates``): a lateral miss corrected while the box is still
+far. A push stalled near the target with the box off its line (``recovery_candidates``) backs off
+with C (which travels towards r at f > 0, ``away``), turns, rolls back and pushes gently: sequences
+of periods that a re-plan compares whole and the plant then runs whole.
 """
 
 from __future__ import annotations
