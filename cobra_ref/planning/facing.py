@@ -44,6 +44,7 @@ FACE_TOL = np.radians(25.0)  # [rad] a re-plan turns the robot while |phi| excee
 STEER_TOL = np.radians(8.0)  # [rad] above this a pushing re-plan also offers a turn before the push
 TURN_FREQUENCY = 1.0  # [Hz] one sidewinding cycle per period of 1 s
 TURN_AMPLITUDES = (0.3, 0.5)  # [rad] the turning candidates' amplitudes
+GENTLE = (0.25, 0.25)  # [rad, Hz] amplitude and frequency of a gentle push (near the target, a recovery's last)
 RECOVERY_BACK = (0.25, 0.5)  # [Hz] the back-off's frequencies (C at 0.4 rad)
 RECOVERY_TURNS = (1, 2, 3)  # periods of turning in a recovery
 W_LATERAL = 3.0  # [m per m] the lateral miss's weight in ``miss`` (a default of ``PushOptions.w_lateral``)
@@ -77,18 +78,28 @@ def _facing(points: np.ndarray, box: int, target) -> tuple[float, float]:
 
 def _push_direction(points: np.ndarray, box: int) -> np.ndarray:
     """n of the bodies' centres ``points`` (nb, 2), the box's at row ``box``."""
+    return _right_and_push(points, box)[1]
+
+
+def _right_and_push(points: np.ndarray, box: int) -> tuple[np.ndarray, np.ndarray]:
+    """(r, n) of the bodies' centres ``points`` (nb, 2), the box's at row ``box`` (module docstring)."""
     robot = np.delete(points, box, axis=0)
     a = body_axis(robot)
     r = np.array([a[1], -a[0]])
     nearest = robot[np.argmin(np.linalg.norm(robot - points[box], axis=1))]
-    return r if (points[box] - nearest) @ r >= 0 else -r
+    return r, (r if (points[box] - nearest) @ r >= 0 else -r)
+
+
+def _turn_family(phi: float) -> str:
+    """The sidewinding that turns towards ``phi``: its mirror counter-clockwise (phi > 0), else clockwise."""
+    return "sidewinding-mirror" if phi > 0 else "sidewinding"
 
 
 def turning_candidates(phi: float) -> list:
     """The candidate pairs of a turning re-plan for the facing error ``phi``: sidewinding-mirror
     (counter-clockwise) for phi > 0, sidewinding otherwise, at each of ``TURN_AMPLITUDES``, forwards
     then backwards and backwards then forwards."""
-    family = "sidewinding-mirror" if phi > 0 else "sidewinding"
+    family = _turn_family(phi)
     out = []
     for amplitude in TURN_AMPLITUDES:
         ahead, back = Primitive(family, amplitude, TURN_FREQUENCY), Primitive(family, amplitude, -TURN_FREQUENCY)
@@ -102,25 +113,24 @@ def steering_candidates(phi: float, moving: Primitive) -> list:
     then the push ``moving`` for the rest of the horizon."""
     if abs(phi) <= STEER_TOL:
         return []
-    family = "sidewinding-mirror" if phi > 0 else "sidewinding"
+    family = _turn_family(phi)
     return [(Primitive(family, TURN_AMPLITUDES[0], sign * TURN_FREQUENCY), moving) for sign in (1, -1)]
 
 
 def away(model, q) -> float:
     """The sign of f with which C rolls the robot away from the box (C at f > 0 travels towards r:
     :mod:`cobra_ref.planning.locomotion`): -1 with the box on the right (n = r), else +1."""
-    points, box = link_centres(model, q), model.boxes[0].body
-    a = body_axis(np.delete(points, box, axis=0))
-    return -1.0 if _push_direction(points, box) @ np.array([a[1], -a[0]]) > 0 else 1.0
+    r, n = _right_and_push(link_centres(model, q), model.boxes[0].body)
+    return -1.0 if n @ r > 0 else 1.0
 
 
 def recovery_candidates(phi: float, sign_away: float) -> list:
     """The sequences (one primitive per period) of a recovery for the facing error ``phi``: C at
     0.4 rad backs off (frequency ``sign_away`` times each of ``RECOVERY_BACK``), the turn towards phi
     alternates forwards and backwards for each of ``RECOVERY_TURNS`` periods at each of
-    ``TURN_AMPLITUDES``, the same C rolls back, a gentle C (0.25 rad, 0.25 Hz) pushes, and a stop ends it."""
-    family = "sidewinding-mirror" if phi > 0 else "sidewinding"
-    gentle, stop = Primitive("C", 0.25, -sign_away * 0.25), Primitive("stop")
+    ``TURN_AMPLITUDES``, the same C rolls back, a gentle C (``GENTLE``) pushes, and a stop ends it."""
+    family = _turn_family(phi)
+    gentle, stop = Primitive("C", GENTLE[0], -sign_away * GENTLE[1]), Primitive("stop")
     out = []
     for f in RECOVERY_BACK:
         back, again = Primitive("C", 0.4, sign_away * f), Primitive("C", 0.4, -sign_away * f)

@@ -21,7 +21,7 @@ stepper's memory and the plan so far):
    from a generator seeded by ``seed`` and the period's index), with |phi| above
    ``facing.STEER_TOL`` one period of a small turn towards the target before the push
    (``facing.steering_candidates``), with the box within ``NEAR`` of
-   the target a gentle push (``GENTLE``) of each rolling shape each way, then a stop, and within
+   the target a gentle push (``facing.GENTLE``) of each rolling shape each way, then a stop, and within
    ``STILL`` a stop;
 2. each candidate is rolled out over the horizon from that state (through the executor, the
    candidates in batches advanced together: ``replan_batched``), and costs, in metres
@@ -69,8 +69,8 @@ from ..simulate import Run
 from ..start import initial_state
 from ..step import StepSettings
 from .cost import effort_term, excess_term, impact_term, robot_weight
-from .facing import (FACE_TOL, STEER_TOL, W_APPROACH, W_LATERAL, away, facing, miss, recovery_candidates,
-                     steering_candidates, turning_candidates)
+from .facing import (FACE_TOL, GENTLE, STEER_TOL, W_APPROACH, W_LATERAL, away, facing, miss,
+                     recovery_candidates, steering_candidates, turning_candidates)
 from .locomotion import link_centres
 from .primitives import ROLLING, PlanReference, Primitive
 
@@ -81,7 +81,6 @@ STILL = 0.02  # [m] and a stop for the whole horizon only this near (farther, a 
 PLANTS = ("cobra_ref", "mujoco")
 STALL_PERIODS, STALL_MOVE = 3, 0.003  # a push has stalled when the box moved less than 3 mm in 3 periods
 RECOVER_WITHIN = 0.1  # [m] a stalled push recovers only this near its target
-GENTLE = (0.25, 0.25)  # [rad, Hz] amplitude and frequency of the gentle pushes among the candidates
 ROLLOUT_DT = 2 * DEFAULT_DT  # [s] the rollouts' time step: the planner predicts in a coarser world than it acts in
 PLANT_DT = DEFAULT_DT  # [s] the plant's: the figures' time step
 
