@@ -124,19 +124,19 @@ def test_a_recovery_backs_off_turns_towards_the_target_rolls_back_and_pushes_gen
     (0.1, 0.2, False, "push"),
 ])
 def test_each_replan_chooses_its_mode_from_the_measured_state(phi, d, stalled, mode):
-    from cobra_ref.planning.receding import choose_candidates
+    from cobra_ref.planning.choices import choose_candidates
 
-    chosen, pairs = choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2, stalled,
-                                      lambda: -1.0)
+    chosen, pairs = choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2,
+                                      100 if stalled else None, lambda: -1.0)
     assert chosen == mode and pairs
     if mode == "recover":
         assert all(len(seq) >= 5 for seq in pairs)
         # a recovery runs its periods but the final stop whole: only those that end within the budget
         shortest = min(len(seq) for seq in pairs) - 1
-        fitting = choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2, stalled,
-                                    lambda: -1.0, shortest)[1]
+        fitting = choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2, shortest,
+                                    lambda: -1.0)[1]
         assert fitting and all(len(seq) - 1 <= shortest for seq in fitting)
-        assert choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2, stalled,
-                                 lambda: -1.0, shortest - 1)[0] == "turn"
+        assert choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2, shortest - 1,
+                                 lambda: -1.0)[0] == "turn"
     if mode == "turn":
         assert {pair[0].family for pair in pairs[:4]} == {"sidewinding-mirror"}

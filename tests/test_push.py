@@ -8,7 +8,9 @@ import pytest
 from cobra_ref.cli import main
 from cobra_ref.infra.executors import SerialExecutor
 from cobra_ref.planning.primitives import ROLLING, Primitive
-from cobra_ref.planning.receding import GENTLE, PushOptions, candidate_cost, candidates, push, replay
+from cobra_ref.planning.choices import candidates, warm_start
+from cobra_ref.planning.facing import GENTLE
+from cobra_ref.planning.receding import PushOptions, candidate_cost, push, replay
 from cobra_ref.step import StepSettings
 
 # two periods of 0.1 s at dt = 2 ms, one period ahead, one noisy sample: 19 rollouts of 50 steps per re-plan
@@ -36,6 +38,23 @@ def test_the_candidates_of_a_replan():
     assert len(candidates(Primitive("C"), np.random.default_rng(0), 2, near=False)) == 4 + 4 + 2
     # near but not yet within STILL: the gentle pushes without the stop
     assert len(candidates(Primitive("C"), np.random.default_rng(0), 2, still=False)) == 4 + 4 + 10 + 2
+
+
+def test_the_next_replan_is_warm_started_from_the_plan_shifted_by_a_period():
+    # the plant applied the pair's first period; the next re-plan starts from what the pair goes on with
+    on, back, stop = Primitive("C", 0.25, 0.33), Primitive("C", 0.25, -0.33), Primitive("stop")
+    turn = Primitive("sidewinding", 0.3, 1.0)
+    assert warm_start((back, on), on) == on  # one period back, then on again: "on", not "back"
+    assert warm_start((back, back), on) == back
+    assert warm_start((on, stop), back) == on  # a push then a stop: the push
+    assert warm_start((turn, on), back) == on  # a turn before the push: the push
+    assert warm_start((turn, turn), on) == on and warm_start((stop, stop), back) == back  # nothing rolls: kept
+    # so the candidates after a period back include going on and then stopping, not only going on
+    assert (on, stop) in candidates(warm_start((back, on), on), np.random.default_rng(0), 0)
+    assert (on, stop) not in candidates(back, np.random.default_rng(0), 0)
+    # and, over a horizon of three periods, going on for two and then stopping: the last plan
+    # (back, on, on) shifted by a period, with a stop where it ended
+    assert (on, on, stop) in candidates(warm_start((back, on), on), np.random.default_rng(0), 0, horizon=3)
 
 
 def test_each_period_applies_the_cheapest_candidate(pushed):

@@ -47,7 +47,7 @@ def run_benchmark(base: PushOptions, executor=None, tasks=GOALS, progress=None, 
         box = result.trajectory.box_pose[:, :2]
         start = box[0]
         passes = [float(np.min(np.linalg.norm(box - (start + np.asarray(w)), axis=1))) for w in via]
-        every = max(1, int(round(0.05 / base.settings.dt)))
+        every = max(1, int(round(0.05 / base.plant_settings.dt)))  # the box path every 50 ms of the plant
         rows.append({"task": name, "goal": list(goal), "via": [list(w) for w in via],
                      "final_error": record["final_distance"], "reached": record["final_distance"] <= REACHED,
                      "waypoint_passes": passes, "simulated_time": record["simulated_time"],

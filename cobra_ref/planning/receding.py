@@ -5,24 +5,17 @@ specified point, and corresponding suitable joint commands are derived", closed 
 period T_p (``PushOptions.period``), from the state the run has reached (the plant's q, qd, its
 stepper's memory and the plan so far):
 
-1. candidates (``choose_candidates``): when the push has stalled (the box moved less than
-   ``STALL_MOVE`` in ``STALL_PERIODS`` periods) within ``RECOVER_WITHIN`` of the target with the box
-   off its line (|phi| above ``facing.STEER_TOL``), recoveries (``facing.recovery_candidates``:
-   back off, turn, roll back, push gently; one primitive per period, each rolled out over its
-   whole length), the chosen one then run whole without re-planning if it ends within the budget;
-   while the robot faces away from the target (its facing error |phi| above
-   ``facing.FACE_TOL``, the box farther than ``STILL`` from the target), turns where it stands
-   (``facing.turning_candidates``), with the box within ``NEAR`` the gentle pushes too; otherwise pairs of primitives (``candidates``;
-   :mod:`cobra_ref.planning.primitives`), one for the next period and one for the rest of the
-   horizon: the last rolling choice continued (the warm start), the same then a stop, the same
-   rolling back (for both, and for one then on again: back to a box the robot rolled past), each
-   rolling family at the last choice's amplitude and frequency, ``samples`` copies of the last
-   choice with Gaussian noise on amplitude, frequency and taper (predictive sampling; the noise
-   from a generator seeded by ``seed`` and the period's index), with |phi| above
-   ``facing.STEER_TOL`` one period of a small turn towards the target before the push
-   (``facing.steering_candidates``), with the box within ``NEAR`` of
-   the target a gentle push (``facing.GENTLE``) of each rolling shape each way, then a stop, and within
-   ``STILL`` a stop;
+1. candidates (:mod:`cobra_ref.planning.choices`, ``choose_candidates``): when the push has stalled
+   (the box moved less than ``STALL_MOVE`` in ``STALL_PERIODS`` periods) within
+   ``choices.RECOVER_WITHIN`` of the target with the box off its line (|phi| above
+   ``facing.STEER_TOL``), recoveries (``facing.recovery_candidates``: back off, turn, roll back,
+   push gently; one primitive per period, each rolled out over its whole length), the chosen one
+   then run whole without re-planning if it ends within the budget; while the robot faces away
+   from the target (|phi| above ``facing.FACE_TOL``), turns where it stands; otherwise pushes:
+   sequences of primitives (:mod:`cobra_ref.planning.primitives`), one per period, the last for
+   the rest of the horizon, sampled around the rolling primitive the last plan goes on with
+   (``choices.warm_start``: the plan shifted by a period), with the noise from a generator
+   seeded by ``seed`` and the period's index;
 2. each candidate is rolled out over the horizon from that state (through the executor, the
    candidates in batches advanced together: ``replan_batched``), and costs, in metres
    (``candidate_cost``)::
@@ -69,18 +62,15 @@ from ..simulate import Run
 from ..start import initial_state
 from ..step import StepSettings
 from .cost import effort_term, excess_term, impact_term, robot_weight
-from .facing import (FACE_TOL, GENTLE, STEER_TOL, W_APPROACH, W_LATERAL, away, facing, miss,
-                     recovery_candidates, steering_candidates, turning_candidates)
+from .choices import choose_candidates, warm_start
+from .facing import W_APPROACH, W_LATERAL, away, facing, miss
 from .locomotion import link_centres
-from .primitives import ROLLING, PlanReference, Primitive
+from .primitives import PlanReference, Primitive
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
 ROLLOUT_BATCHES = 2  # a re-plan's candidates go to the executor as this many batches (``replan_batched``)
-NEAR = 0.05  # [m] the gentle pushes are candidates only with the box this near its target
-STILL = 0.02  # [m] and a stop for the whole horizon only this near (farther, a stop stalls the push)
 PLANTS = ("cobra_ref", "mujoco")
 STALL_PERIODS, STALL_MOVE = 3, 0.003  # a push has stalled when the box moved less than 3 mm in 3 periods
-RECOVER_WITHIN = 0.1  # [m] a stalled push recovers only this near its target
 ROLLOUT_DT = 2 * DEFAULT_DT  # [s] the rollouts' time step: the planner predicts in a coarser world than it acts in
 PLANT_DT = DEFAULT_DT  # [s] the plant's: the figures' time step
 
@@ -137,40 +127,6 @@ class PushOptions:
         """The plant's ``StepSettings``: the rollouts' with ``plant_dt`` (another world than the one
         the planner predicts with, when it differs)."""
         return self.settings if self.plant_dt is None else replace(self.settings, dt=self.plant_dt)
-
-
-def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: bool = True,
-               still: bool = True) -> list:
-    """The candidate pairs (first period, the rest of the horizon) of one re-plan from the last
-    rolling primitive ``moving`` (module docstring); the gentle pushes only when the box is
-    ``near`` its target, and a stop for the whole horizon only when it is ``still`` nearer (farther,
-    standing still would often look the safest choice and the push would stall)."""
-    stop, back = Primitive("stop"), replace(moving, frequency=-moving.frequency)
-    # rolling back (and then on again) brings the robot back to a box it has rolled past
-    out = [(moving, moving), (moving, stop), (back, back), (back, moving)] + ([(stop, stop)] if near and still else [])
-    out += [(p, p) for p in (replace(moving, family=f) for f in ROLLING) if p != moving]
-    if near:  # a gentle push of every rolling shape, each way, then a stop: the small corrections near the target
-        out += gentle(moving)
-    for _ in range(samples):
-        noisy = _perturbed(moving, rng)
-        out.append((noisy, noisy))
-    return out
-
-
-def gentle(moving: Primitive) -> list:
-    """The gentle pushes (``GENTLE``) of every rolling shape each way at ``moving``'s taper, each then a stop."""
-    return [(Primitive(f, GENTLE[0], sign * GENTLE[1], moving.taper), Primitive("stop")) for f in ROLLING
-            for sign in (1, -1)]
-
-
-def _perturbed(p: Primitive, rng: np.random.Generator) -> Primitive:
-    """p with amplitude, frequency (its size; its sign kept) and taper moved by Gaussian noise and
-    clipped to their ranges."""
-    a, f, b = rng.normal(size=3) * (0.1, 0.15, 0.3)
-    amplitude = float(np.clip(p.amplitude + a, 0.25, 0.75))
-    taper = float(np.clip(p.taper + b, -0.8, 0.8)) if p.family in ROLLING else 0.0
-    frequency = float(np.copysign(np.clip(abs(p.frequency) + f, 0.25, 1.0), p.frequency))
-    return replace(p, amplitude=amplitude, frequency=frequency, taper=taper)
 
 
 @dataclass(frozen=True)
@@ -293,11 +249,12 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
                 last = queue.pop(0)
             else:
                 mode, pairs = choose_candidates(phi, d0, moving, np.random.default_rng([o.seed, k]), o.samples,
-                                                stalled, lambda: away(model, run.q), n_budget - k)
+                                                n_budget - k if stalled else None, lambda: away(model, run.q),
+                                                o.horizon)
                 best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, mode == "turn"), executor)
                 last, queue = pairs[best][0], list(pairs[best][1:-1]) if mode == "recover" else []
             calm = 0 if mode == "recover" else calm + 1
-            moving = last if last.family in ROLLING and mode != "recover" else moving
+            moving = moving if mode == "recover" else warm_start(pairs[best], moving)
             plan.extend(last, t)
             run.advance(plan, n_period)
             d = distance()
@@ -320,22 +277,6 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
                                 time.perf_counter() - start)
         raise
     return PushResult(run.finish(), plan, cycles, targets[-1], reached, reason, time.perf_counter() - start)
-
-
-def choose_candidates(phi: float, d: float, moving: Primitive, rng: np.random.Generator, samples: int,
-                      stalled: bool, sign_away, periods_left: int = 10**6) -> tuple[str, list]:
-    """(mode, candidates) of one re-plan (module docstring, step 1) for the facing error ``phi`` and
-    the box's distance ``d`` to the target: "recover" (``facing.recovery_candidates`` that end within
-    ``periods_left``; ``sign_away()`` gives the back-off's sign) when the push has ``stalled`` within
-    ``RECOVER_WITHIN`` with the box off its line, "turn" while the robot faces away, else "push"."""
-    if stalled and STILL < d <= RECOVER_WITHIN and abs(phi) > STEER_TOL:
-        fitting = [seq for seq in recovery_candidates(phi, sign_away()) if len(seq) - 1 <= periods_left]
-        if fitting:  # its periods but the final stop are run whole, so a recovery must fit in the budget
-            return "recover", fitting
-    if abs(phi) > FACE_TOL and d > STILL:  # the robot faces away from the target: it turns where it stands first
-        return "turn", turning_candidates(phi) + (gentle(moving) if d <= NEAR else [])
-    return "push", (candidates(moving, rng, samples, near=d <= NEAR, still=d <= STILL)
-                    + steering_candidates(phi, moving))
 
 
 def replan(jobs: list, predict, executor=None) -> tuple[int, list]:
