@@ -224,3 +224,35 @@ def test_mujoco_as_the_plant_executes_the_plan_and_replays_it():
     np.testing.assert_array_equal(again.q, result.trajectory.q)
     with pytest.raises(ValueError, match="needs its factory"):
         push(options, SerialExecutor())
+
+
+def test_a_goal_on_the_robots_side_or_beyond_the_budget_is_said_up_front():
+    # the start: C with the box on its concave side, pushed along +x; 0.25 m ahead is plain, 0.25 m
+    # behind lies on the robot's side (it must go round the box), 12 m ahead is beyond 0.3 m/s for 30 s
+    from cobra_ref.planning.primitives import PlanReference
+    from cobra_ref.planning.receding import PUSH_SPEED, outlook
+    from cobra_ref.robots import cobra_model
+    from cobra_ref.start import initial_state
+
+    model = cobra_model()
+    q, _ = initial_state(model, PlanReference(Primitive("C")), StepSettings())
+    box = q[model.q_idx[model.boxes[0].body].start:][:2]
+    assert outlook(model, q, [tuple(box + (0.25, 0.0))], 30.0) == []
+    behind = outlook(model, q, [tuple(box + (-0.25, 0.0))], 30.0)
+    assert len(behind) == 1 and "the goal lies on the robot's side of the box" in behind[0]
+    far = outlook(model, q, [tuple(box + (0.2, 0.0)), tuple(box + (12.0, 0.0))], 30.0)
+    assert len(far) == 1 and "out of reach" in far[0] and 12.0 > PUSH_SPEED * 30.0
+
+
+def test_a_push_that_spends_its_budget_says_why():
+    from cobra_ref.planning.receding import gave_up
+
+    # the box at each period's start and at the end, and its distance to the target
+    still = [(0.0, 0.0), (0.001, 0.0), (0.0, 0.001), (0.002, 0.0), (0.001, 0.0)]
+    assert gave_up(still, [0.25, 0.249, 0.25, 0.248, 0.249]) == "budget spent: the robot never moved the box"
+    # the box drifts by centimetres but comes less than 3 mm nearer in the last three periods
+    creeping = [(0.0, 0.0), (0.1, 0.0), (0.2, 0.0), (0.21, 0.01), (0.21, 0.02), (0.22, 0.03)]
+    assert gave_up(creeping, [0.25, 0.15, 0.052, 0.051, 0.05, 0.05]) == \
+        "budget spent: the push stalled 5.00 cm from its target"
+    pushing = [(0.0, 0.0), (0.05, 0.0), (0.1, 0.0), (0.15, 0.0)]
+    assert gave_up(pushing, [0.25, 0.2, 0.15, 0.1]) == "budget spent: still pushing, 10.00 cm from its target"

@@ -6,7 +6,7 @@ period T_p (``PushOptions.period``), from the state the run has reached (the pla
 stepper's memory and the plan so far):
 
 1. candidates (:mod:`cobra_ref.planning.choices`, ``choose_candidates``): when the push has stalled
-   (the box moved less than ``STALL_MOVE`` in ``STALL_PERIODS`` periods) within
+   (the box came less than ``STALL_MOVE`` nearer its target in ``STALL_PERIODS`` periods) within
    ``choices.RECOVER_WITHIN`` of the target with the box off its line (|phi| above
    ``facing.STEER_TOL``), recoveries (``facing.recovery_candidates``: back off, turn, roll back,
    push gently; one primitive per period, each rolled out over its whole length), the chosen one
@@ -70,9 +70,10 @@ from .primitives import PlanReference, Primitive
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
 ROLLOUT_BATCHES = 2  # a re-plan's candidates go to the executor as this many batches (``replan_batched``)
 PLANTS = ("cobra_ref", "mujoco")
-STALL_PERIODS, STALL_MOVE = 3, 0.003  # a push has stalled when the box moved less than 3 mm in 3 periods
+STALL_PERIODS, STALL_MOVE = 3, 0.003  # a push has stalled when the box came less than 3 mm nearer in 3 periods
 ROLLOUT_DT = 2 * DEFAULT_DT  # [s] the rollouts' time step: the planner predicts in a coarser world than it acts in
 PLANT_DT = DEFAULT_DT  # [s] the plant's: the figures' time step
+PUSH_SPEED = 0.3  # [m/s] about the fastest push measured: no rollout of the single-shooting searches moved the box more than 0.43 m in 1.5 s
 
 
 @dataclass(frozen=True)
@@ -212,6 +213,7 @@ class PushResult:
     reached: bool
     reason: str
     wall_time: float
+    outlook: list = field(default_factory=list)  # what made the task hard or out of reach, said up front (``outlook``)
 
 
 def push(options: PushOptions, executor=None, progress=None, plant=None) -> PushResult:
@@ -233,8 +235,11 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     n_budget = int(round(o.budget / o.period))
     run = _plant(o, plant)(model, settings, q0, qd0, n_period * n_budget)
     cycles, last, moving, aim = [], o.start, o.start, 0
-    boxes, queue, calm = [], [], 0  # the box at each period's start; a recovery's periods to run; periods since one
+    boxes, ds, queue, calm = [], [], [], 0  # the box, its distance at each period's start; a recovery's periods; periods since one
     start, reason, reached = time.perf_counter(), "budget spent", False
+    notes = outlook(model, q0, targets, o.budget)
+    for note in notes if progress is not None else ():
+        progress(f"note: {note}")
 
     def distance() -> float:  # the box centre to the current target [m]
         return float(np.linalg.norm(run.q[box:box + 2] - np.asarray(targets[aim])))
@@ -243,7 +248,8 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
         for k in range(n_budget):
             t, phi, d0 = run.t, facing(model, run.q, targets[aim]), distance()
             boxes.append(run.q[box:box + 2].copy())
-            stalled = calm >= STALL_PERIODS and np.linalg.norm(boxes[-1] - boxes[-1 - STALL_PERIODS]) < STALL_MOVE
+            ds.append(d0)
+            stalled = calm >= STALL_PERIODS and ds[-1 - STALL_PERIODS] - d0 < STALL_MOVE
             if queue:  # the rest of a recovery, run whole
                 mode, pairs, results, best = "recover", [], [{"cost": None}], 0
                 last = queue.pop(0)
@@ -268,15 +274,49 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
                 progress(f"t = {run.t:5.1f} s  phi {np.degrees(phi):+6.1f} deg  {_name(last):<41} box {100 * d:6.2f} cm from "
                          f"{'the goal' if aim == len(targets) - 1 else f'waypoint {aim + 1}'}")
             if aim < len(targets) - 1 and d <= o.via_tolerance:
-                aim += 1
+                aim, calm = aim + 1, 0  # a new target: its stall is measured from here
             elif aim == len(targets) - 1 and d <= o.tolerance and last.family == "stop":
                 reason, reached = "the box is at the goal", True
                 break
+        reason = reason if reached else gave_up(boxes + [run.q[box:box + 2].copy()], ds + [distance()])
     except KeyboardInterrupt as exc:
         exc.result = PushResult(run.finish("interrupted"), plan, cycles, targets[-1], False, "interrupted",
-                                time.perf_counter() - start)
+                                time.perf_counter() - start, notes)
         raise
-    return PushResult(run.finish(), plan, cycles, targets[-1], reached, reason, time.perf_counter() - start)
+    return PushResult(run.finish(), plan, cycles, targets[-1], reached, reason, time.perf_counter() - start, notes)
+
+
+def outlook(model, q, targets: list, budget: float) -> list:
+    """What keeps the ``targets`` (world (x, y), the goal last) out of reach or hard within the
+    ``budget`` [s], said before the push starts: a path longer than the fastest push covers
+    (``PUSH_SPEED``), and a first target on the robot's side of the box (|phi| > 90 deg: the robot
+    must turn or go round the box before it pushes, and its primitives do that slowly)."""
+    notes = []
+    box = model.q_idx[model.boxes[0].body].start
+    path = np.vstack([q[box:box + 2]] + [np.asarray(t, dtype=float) for t in targets])
+    length = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
+    if length > PUSH_SPEED * budget:
+        notes.append(f"the box's way is {length:.2f} m; the fastest push measured moves it {PUSH_SPEED:g} m/s, "
+                     f"{PUSH_SPEED * budget:.2f} m in the budget: out of reach")
+    phi = facing(model, q, targets[0])
+    if abs(phi) > np.pi / 2:
+        notes.append(f"the {'first waypoint' if len(targets) > 1 else 'goal'} lies on the robot's side of the box "
+                     f"(facing error {np.degrees(phi):+.0f} deg): the robot must turn or go round the box before it "
+                     "pushes, which its primitives do slowly")
+    return notes
+
+
+def gave_up(boxes: list, ds: list) -> str:
+    """The reason a push that spent its budget gives, from the box's position (``boxes``) and its
+    distance [m] to its target (``ds``) at each period's start and at the end: it never moved, the
+    push stalled (the box came less than ``STALL_MOVE`` nearer in the last ``STALL_PERIODS``
+    periods), or it was still pushing."""
+    boxes, d = np.asarray(boxes), ds[-1]
+    if np.max(np.linalg.norm(boxes - boxes[0], axis=1)) < STALL_MOVE:
+        return "budget spent: the robot never moved the box"
+    if len(ds) > STALL_PERIODS and ds[-1 - STALL_PERIODS] - d < STALL_MOVE:
+        return f"budget spent: the push stalled {100 * d:.2f} cm from its target"
+    return f"budget spent: still pushing, {100 * d:.2f} cm from its target"
 
 
 def replan(jobs: list, predict, executor=None) -> tuple[int, list]:
@@ -329,7 +369,7 @@ def push_record(result: PushResult, options: PushOptions) -> dict:
                         "weights": {"effort": o.w_effort, "impact": o.w_impact, "tau": o.w_tau,
                                     "approach": o.w_approach, "face": o.w_face, "lateral": o.w_lateral}},
             "plan": result.plan.to_dict(), "cycles": result.cycles, "goal_world": list(result.goal_world),
-            "reached": result.reached, "reason": result.reason, "final_distance": final,
+            "reached": result.reached, "reason": result.reason, "outlook": result.outlook, "final_distance": final,
             "simulated_time": traj.duration,
             "impact_impulse_per_second": float(np.sum(traj.steps["impact_impulse"])) / max(traj.duration, 1e-12),
             "rollouts": int(sum(c["rollouts"] for c in result.cycles)), "wall_time": round(result.wall_time, 1)}
