@@ -5,9 +5,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from cobra_ref.planning.facing import (FACE_TOL, RECOVERY_BACK, RECOVERY_TURNS, STEER_TOL, TURN_AMPLITUDES, away,
-                                       facing, miss, push_direction, recovery_candidates, steering_candidates,
-                                       turning_candidates)
+from cobra_ref.planning.facing import (FACE_TOL, RECOVERY_BACK, RECOVERY_TAIL, RECOVERY_TURNS, STEER_TOL,
+                                       TURN_AMPLITUDES, away, facing, miss, push_direction, recovery_candidates,
+                                       steering_candidates, turning_candidates)
 from cobra_ref.planning.primitives import Primitive
 from cobra_ref.planning.locomotion import body_axis, link_centres
 from cobra_ref.robots import cobra_model, neutral_q
@@ -108,12 +108,13 @@ def test_a_recovery_backs_off_turns_towards_the_target_rolls_back_and_pushes_gen
     assert len(sequences) == len(RECOVERY_BACK) * len(TURN_AMPLITUDES) * len(RECOVERY_TURNS)
     for seq in sequences:
         back, *turns, again, gentle, stop = seq
+        assert seq[-RECOVERY_TAIL:] == (again, gentle, stop)  # re-planned as they come; the rest runs whole
         assert back.family == again.family == gentle.family == "C" and back.frequency < 0 < again.frequency
         assert again.frequency == -back.frequency and 0 < gentle.frequency <= again.frequency and stop.family == "stop"
         assert gentle.amplitude < again.amplitude
         assert {t.family for t in turns} == {"sidewinding-mirror"} and len(turns) in RECOVERY_TURNS
         assert all(a.frequency == -b.frequency for a, b in zip(turns, turns[1:]))  # forwards, backwards, ...
-    assert {p.family for seq in recovery_candidates(-0.5, -1.0) for p in seq[1:-3]} == {"sidewinding"}
+    assert {p.family for seq in recovery_candidates(-0.5, -1.0) for p in seq[1:-RECOVERY_TAIL]} == {"sidewinding"}
 
 
 @pytest.mark.parametrize("phi, d, stalled, mode", [

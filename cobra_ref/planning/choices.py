@@ -34,7 +34,7 @@ def choose_candidates(phi: float, d: float, moving: Primitive, rng: np.random.Ge
     ``horizon`` periods)."""
     if stalled is not None and STILL < d <= RECOVER_WITHIN and abs(phi) > STEER_TOL:
         fitting = [seq for seq in recovery_candidates(phi, sign_away()) if len(seq) - 1 <= stalled]
-        if fitting:  # its periods but the final stop are run whole, so a recovery must fit in the budget
+        if fitting:  # a recovery must end within the budget
             return "recover", fitting
     if abs(phi) > FACE_TOL and d > STILL:  # the robot faces away from the target: it turns where it stands first
         return "turn", turning_candidates(phi) + (gentle(moving) if d <= NEAR else [])

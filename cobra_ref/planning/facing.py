@@ -30,7 +30,10 @@ Between ``STEER_TOL`` and ``FACE_TOL`` a pushing re-plan also offers one period 
 before the push goes on (``steering_candidates``): a lateral miss corrected while the box is still
 far. A push stalled near the target with the box off its line (``recovery_candidates``) backs off
 with C (which travels towards r at f > 0, ``away``), turns, rolls back and pushes gently: sequences
-of periods that a re-plan compares whole and the plant then runs whole.
+of periods that a re-plan compares whole; the plant then runs the back-off and the turns without
+re-planning (re-planned every period, the back-off would be taken and then, from farther away, the
+turn not), and the last ``RECOVERY_TAIL`` periods are re-planned as they come, from where the box
+has really gone.
 """
 
 from __future__ import annotations
@@ -47,6 +50,7 @@ TURN_AMPLITUDES = (0.3, 0.5)  # [rad] the turning candidates' amplitudes
 GENTLE = (0.25, 0.25)  # [rad, Hz] amplitude and frequency of a gentle push (near the target, a recovery's last)
 RECOVERY_BACK = (0.25, 0.5)  # [Hz] the back-off's frequencies (C at 0.4 rad)
 RECOVERY_TURNS = (1, 2, 3)  # periods of turning in a recovery
+RECOVERY_TAIL = 3  # a recovery's periods after its turns: roll back, push gently, stop
 W_LATERAL = 3.0  # [m per m] the lateral miss's weight in ``miss`` (a default of ``PushOptions.w_lateral``)
 W_APPROACH = 1.0  # [m per m] a turn's weight of the pushing distance: it must end with the box in reach
 

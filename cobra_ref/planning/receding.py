@@ -9,8 +9,9 @@ stepper's memory and the plan so far):
    (the box came less than ``STALL_MOVE`` nearer its target in ``STALL_PERIODS`` periods) within
    ``choices.RECOVER_WITHIN`` of the target with the box off its line (|phi| above
    ``facing.STEER_TOL``), recoveries (``facing.recovery_candidates``: back off, turn, roll back,
-   push gently; one primitive per period, each rolled out over its whole length), the chosen one
-   then run whole without re-planning if it ends within the budget; while the robot faces away
+   push gently; one primitive per period, each rolled out over its whole length; one starts only
+   if it ends within the budget), the chosen one's back-off and turns then run without
+   re-planning, and its roll back and push re-planned as they come; while the robot faces away
    from the target (|phi| above ``facing.FACE_TOL``), turns where it stands; otherwise pushes:
    sequences of primitives (:mod:`cobra_ref.planning.primitives`), one per period, the last for
    the rest of the horizon, sampled around the rolling primitive the last plan goes on with
@@ -63,7 +64,7 @@ from ..start import initial_state
 from ..step import StepSettings
 from .cost import effort_term, excess_term, impact_term, robot_weight
 from .choices import choose_candidates, warm_start
-from .facing import W_APPROACH, W_LATERAL, away, facing, miss
+from .facing import RECOVERY_TAIL, W_APPROACH, W_LATERAL, away, facing, miss
 from .locomotion import link_centres
 from .primitives import PlanReference, Primitive
 
@@ -250,7 +251,7 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
             boxes.append(run.q[box:box + 2].copy())
             ds.append(d0)
             stalled = calm >= STALL_PERIODS and ds[-1 - STALL_PERIODS] - d0 < STALL_MOVE
-            if queue:  # the rest of a recovery, run whole
+            if queue:  # a recovery's back-off and turns, run without re-planning
                 mode, pairs, results, best = "recover", [], [{"cost": None}], 0
                 last = queue.pop(0)
             else:
@@ -258,7 +259,7 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
                                                 n_budget - k if stalled else None, lambda: away(model, run.q),
                                                 o.horizon)
                 best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, mode == "turn"), executor)
-                last, queue = pairs[best][0], list(pairs[best][1:-1]) if mode == "recover" else []
+                last, queue = pairs[best][0], list(pairs[best][1:-RECOVERY_TAIL]) if mode == "recover" else []
             calm = 0 if mode == "recover" else calm + 1
             moving = moving if mode == "recover" else warm_start(pairs[best], moving)
             plan.extend(last, t)
