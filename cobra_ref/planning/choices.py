@@ -63,7 +63,7 @@ def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: 
         out += gentle(moving)
     for i in range(samples):
         noisy, k = _perturbed(moving, rng), horizon - i % horizon if final else horizon
-        out.append((noisy, noisy) if k == horizon else (noisy,) * k + (Primitive("stop"),))
+        out.append((noisy, noisy) if k == horizon else (noisy,) * k + (stop,))
     return out
 
 

@@ -239,8 +239,9 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     boxes, ds, queue, calm = [], [], [], 0  # the box, its distance at each period's start; a recovery's periods; periods since one
     start, reason, reached = time.perf_counter(), "budget spent", False
     notes = outlook(model, q0, targets, o.budget)
-    for note in notes if progress is not None else ():
-        progress(f"note: {note}")
+    if progress is not None:
+        for note in notes:
+            progress(f"note: {note}")
 
     def distance() -> float:  # the box centre to the current target [m]
         return float(np.linalg.norm(run.q[box:box + 2] - np.asarray(targets[aim])))
@@ -250,7 +251,7 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
             t, phi, d0 = run.t, facing(model, run.q, targets[aim]), distance()
             boxes.append(run.q[box:box + 2].copy())
             ds.append(d0)
-            stalled = calm >= STALL_PERIODS and ds[-1 - STALL_PERIODS] - d0 < STALL_MOVE
+            stalled = calm >= STALL_PERIODS and _stalled(ds)
             if queue:  # a recovery's back-off and turns, run without re-planning
                 mode, pairs, results, best = "recover", [], [{"cost": None}], 0
                 last = queue.pop(0)
@@ -315,9 +316,15 @@ def gave_up(boxes: list, ds: list) -> str:
     boxes, d = np.asarray(boxes), ds[-1]
     if np.max(np.linalg.norm(boxes - boxes[0], axis=1)) < STALL_MOVE:
         return "budget spent: the robot never moved the box"
-    if len(ds) > STALL_PERIODS and ds[-1 - STALL_PERIODS] - d < STALL_MOVE:
+    if _stalled(ds):
         return f"budget spent: the push stalled {100 * d:.2f} cm from its target"
     return f"budget spent: still pushing, {100 * d:.2f} cm from its target"
+
+
+def _stalled(ds: list) -> bool:
+    """Whether the box came less than ``STALL_MOVE`` nearer its target over the last
+    ``STALL_PERIODS`` periods, from its distances ``ds`` [m] at each period's start (the last: now)."""
+    return len(ds) > STALL_PERIODS and ds[-1 - STALL_PERIODS] - ds[-1] < STALL_MOVE
 
 
 def replan(jobs: list, predict, executor=None) -> tuple[int, list]:
