@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from cobra_ref.planning.facing import (FACE_TOL, RECOVERY_BACK, RECOVERY_TAIL, RECOVERY_TURNS, STEER_TOL,
-                                       TURN_AMPLITUDES, away, facing, miss, push_direction, recovery_candidates,
-                                       steering_candidates, turning_candidates)
+                                       TURN_AMPLITUDES, TURN_PAIR, away, facing, miss, push_direction,
+                                       recovery_candidates, steering_candidates, turning_candidates)
 from cobra_ref.planning.primitives import Primitive
 from cobra_ref.planning.locomotion import body_axis, link_centres
 from cobra_ref.robots import cobra_model, neutral_q
@@ -63,12 +63,14 @@ def test_the_miss_weights_the_distance_across_the_push_direction(degrees, factor
 
 def test_turning_candidates_turn_the_way_the_target_lies():
     # counter-clockwise (sidewinding-mirror) for a target to the left of the push direction,
-    # clockwise (sidewinding) to its right; forwards-then-backwards and the reverse at each amplitude
+    # clockwise (sidewinding) to its right; forwards-then-backwards and the reverse at each amplitude,
+    # then a stop: the plant runs the pair whole (TURN_PAIR periods), its rollout ends at rest
     left, right = turning_candidates(0.5), turning_candidates(-0.5)
-    assert {p.family for pair in left for p in pair} == {"sidewinding-mirror"}
-    assert {p.family for pair in right for p in pair} == {"sidewinding"}
-    assert all(a.frequency == -b.frequency and a.amplitude == b.amplitude for a, b in left)
-    assert len(left) == 4 and len({pair for pair in left}) == 4
+    assert {p.family for seq in left for p in seq[:TURN_PAIR]} == {"sidewinding-mirror"}
+    assert {p.family for seq in right for p in seq[:TURN_PAIR]} == {"sidewinding"}
+    assert all(a.frequency == -b.frequency and a.amplitude == b.amplitude and rest.family == "stop"
+               for a, b, rest in left + right)
+    assert len(left) == 4 and len({seq for seq in left}) == 4 and TURN_PAIR == 2
 
 
 def test_a_push_offers_a_turn_first_only_when_the_box_is_off_its_line():
@@ -87,13 +89,27 @@ def test_a_replan_turns_the_robot_while_it_faces_away_from_the_target():
     from cobra_ref.planning.receding import push
     from test_push import TINY
 
-    left = push(replace(TINY, goal=(0.0, 0.2), budget=0.1), SerialExecutor())
-    first = left.cycles[0]
+    left = push(replace(TINY, goal=(0.0, 0.2), budget=0.2), SerialExecutor())
+    first, second = left.cycles
     assert first["mode"] == "turn" and first["facing"] > np.degrees(FACE_TOL)
-    assert left.plan.primitives[0].family == "sidewinding-mirror"
     assert all(c["pair"][0].startswith("sidewinding-mirror") for c in first["candidates"])
+    # the chosen pair runs whole: the second period winds the other way, with no re-plan
+    turn, reverse = left.plan.primitives[:2]
+    assert turn.family == reverse.family == "sidewinding-mirror" and reverse.frequency == -turn.frequency
+    assert second["mode"] == "turn" and second["rollouts"] == 0
     ahead = push(replace(TINY, goal=(0.2, 0.0), budget=0.1), SerialExecutor())
     assert ahead.cycles[0]["mode"] == "push" and abs(ahead.cycles[0]["facing"]) < np.degrees(FACE_TOL)
+
+
+def test_the_plant_runs_a_turn_pair_and_a_recovery_s_back_off_and_turns_without_re_planning():
+    from cobra_ref.planning.receding import committed
+
+    turn = turning_candidates(0.5)[0]
+    assert committed("turn", turn) == [turn[1]]  # the pair's second half; its stop is only the rollout's
+    recovery = recovery_candidates(0.5, -1.0)[-1]
+    assert committed("recover", recovery) == list(recovery[1:-RECOVERY_TAIL])
+    gentle = (Primitive("C", 0.25, 0.25), Primitive("stop"))  # a turning re-plan near the target also offers these
+    assert committed("turn", gentle) == [] and committed("push", (Primitive("C"), Primitive("C"))) == []
 
 
 @pytest.mark.parametrize("side, sign", [(0.2, -1.0), (-0.2, 1.0)])
@@ -117,18 +133,19 @@ def test_a_recovery_backs_off_turns_towards_the_target_rolls_back_and_pushes_gen
     assert {p.family for seq in recovery_candidates(-0.5, -1.0) for p in seq[1:-RECOVERY_TAIL]} == {"sidewinding"}
 
 
-@pytest.mark.parametrize("phi, d, stalled, mode", [
-    (0.5, 0.03, True, "recover"),  # stalled near the target, the box off the line
-    (0.5, 0.2, True, "turn"),  # stalled, but too far for a recovery: turn where it stands
+@pytest.mark.parametrize("phi, d, may_recover, mode", [
+    # may_recover: the push stalled, or the robot faces away (receding.push gives the periods left then)
+    (0.5, 0.03, True, "recover"),  # near the target, the box off the line
+    (0.5, 0.2, True, "turn"),  # too far for a recovery: turn where it stands
     (0.1, 0.03, True, "push"),  # stalled on the line: no turn would help
     (0.5, 0.03, False, "turn"), (0.5, 0.01, False, "push"),  # within 2 cm nothing but pushes and stops
     (0.1, 0.2, False, "push"),
 ])
-def test_each_replan_chooses_its_mode_from_the_measured_state(phi, d, stalled, mode):
+def test_each_replan_chooses_its_mode_from_the_measured_state(phi, d, may_recover, mode):
     from cobra_ref.planning.choices import choose_candidates
 
     chosen, pairs = choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2,
-                                      100 if stalled else None, lambda: -1.0)
+                                      100 if may_recover else None, lambda: -1.0)
     assert chosen == mode and pairs
     if mode == "recover":
         assert all(len(seq) >= 5 for seq in pairs)

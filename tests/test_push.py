@@ -230,7 +230,7 @@ def test_a_goal_on_the_robots_side_or_beyond_the_budget_is_said_up_front():
     # the start: C with the box on its concave side, pushed along +x; 0.25 m ahead is plain, 0.25 m
     # behind lies on the robot's side (it must go round the box), 12 m ahead is beyond 0.3 m/s for 30 s
     from cobra_ref.planning.primitives import PlanReference
-    from cobra_ref.planning.receding import PUSH_SPEED, outlook
+    from cobra_ref.planning.verdicts import PUSH_SPEED, outlook
     from cobra_ref.robots import cobra_model
     from cobra_ref.start import initial_state
 
@@ -245,7 +245,7 @@ def test_a_goal_on_the_robots_side_or_beyond_the_budget_is_said_up_front():
 
 
 def test_a_push_that_spends_its_budget_says_why():
-    from cobra_ref.planning.receding import gave_up
+    from cobra_ref.planning.verdicts import gave_up
 
     # the box at each period's start and at the end, and its distance to the target
     still = [(0.0, 0.0), (0.001, 0.0), (0.0, 0.001), (0.002, 0.0), (0.001, 0.0)]
@@ -256,3 +256,44 @@ def test_a_push_that_spends_its_budget_says_why():
         "budget spent: the push stalled 5.00 cm from its target"
     pushing = [(0.0, 0.0), (0.05, 0.0), (0.1, 0.0), (0.15, 0.0)]
     assert gave_up(pushing, [0.25, 0.2, 0.15, 0.1]) == "budget spent: still pushing, 10.00 cm from its target"
+
+
+def test_a_push_ends_when_the_robot_has_rested_for_three_periods():
+    # three re-plans in a row chose to stop: nothing the planner has brings the box nearer
+    from cobra_ref.planning.primitives import PlanReference
+    from cobra_ref.planning.receding import resting
+    from cobra_ref.planning.verdicts import STALL_PERIODS
+
+    on, stop = Primitive("C"), Primitive("stop")
+    plan = PlanReference(on)
+    for k, p in enumerate([on] + [stop] * (STALL_PERIODS - 1)):
+        plan.extend(p, float(k))
+    assert not resting(plan)  # two stops after a push
+    plan.extend(stop, float(STALL_PERIODS))
+    assert resting(plan)
+    plan.extend(on, 10.0)
+    assert not resting(plan)
+
+
+def test_the_box_passes_a_waypoint_anywhere_on_its_way_during_a_period():
+    # advance_watching takes the steps one advance of the period takes, bit for bit, and returns the
+    # box's closest distance to the target on the way: here a target on the box's path at the
+    # period's middle, which the period's end has left behind
+    from cobra_ref.planning.primitives import PlanReference
+    from cobra_ref.planning.receding import advance_watching
+    from cobra_ref.robots import cobra_model
+    from cobra_ref.simulate import Run
+    from cobra_ref.start import initial_state
+
+    model, settings = cobra_model(), StepSettings(dt=0.002)
+    plan = PlanReference(Primitive("C", 0.5, 1.0))
+    plan.extend(Primitive("C", 0.5, 1.0), 0.0)
+    q0, qd0 = initial_state(model, plan, settings)
+    box = model.q_idx[model.boxes[0].body].start
+    whole, watched = (Run(model, settings, q0, qd0, "fast", 250) for _ in range(2))
+    whole.advance(plan, 250)
+    middle = whole.finish().q[125, box:box + 2]  # where the box was at 0.25 s
+    closest = advance_watching(watched, plan, 250, box, middle)
+    np.testing.assert_array_equal(watched.q, whole.q)
+    end = float(np.linalg.norm(watched.q[box:box + 2] - middle))
+    assert closest == 0.0 and end > 0.005  # sampled every 50 ms, 0.25 s among them; the end 5 mm or more away

@@ -8,7 +8,9 @@ JSON written as the search goes).
 The closed loop (``cobra-ref push``) is read after it: ``primitives`` (the per-period motion
 primitives and the joint reference they chain into), ``locomotion`` (where each primitive takes the
 robot alone), ``facing`` (which way the robot can push the box, and the turns that face it towards
-the target), ``receding`` (the receding-horizon planner), ``benchmark`` (its goals around the box).
+the target), ``choices`` (the candidates of one re-plan), ``receding`` (the receding-horizon planner),
+``verdicts`` (what a push says of its task, up front and when it gives up), ``benchmark`` (its goals
+around the box).
 """
 
 from ..infra.executors import SerialExecutor

@@ -2,8 +2,8 @@
 
 Each candidate is a sequence of primitives, one per period, the last for the rest of the horizon
 (a pair: the next period and the rest). Which ones a re-plan rolls out depends on the state it
-starts from (``choose_candidates``): a stalled push near its target recovers
-(``facing.recovery_candidates``), a robot facing away from the target turns where it stands
+starts from (``choose_candidates``): a stalled push near its target, or a robot facing away from
+it there, recovers (``facing.recovery_candidates``), a robot facing away from the target turns where it stands
 (``facing.turning_candidates``), and otherwise it pushes (``candidates``): predictive sampling
 around the rolling primitive the last plan goes on with (``warm_start``), with the deterministic
 variations a push needs near its target (stops, rolling back, gentle pushes, shorter pushes).
@@ -20,20 +20,22 @@ from .primitives import ROLLING, Primitive
 
 NEAR = 0.05  # [m] the gentle pushes are candidates only with the box this near its target
 STILL = 0.02  # [m] and a stop for the whole horizon only this near (farther, a stop stalls the push)
-RECOVER_WITHIN = 0.1  # [m] a stalled push recovers only this near its target
+RECOVER_WITHIN = 0.1  # [m] a stalled push, or a robot facing away, recovers only this near its target
 FINAL = 0.1  # [m] within this of the target the noisy samples push for fewer periods and stop (``candidates``)
 
 
 def choose_candidates(phi: float, d: float, moving: Primitive, rng: np.random.Generator, samples: int,
-                      stalled: int | None, sign_away, horizon: int = 2) -> tuple[str, list]:
+                      recover: int | None, sign_away, horizon: int = 2) -> tuple[str, list]:
     """(mode, candidates) of one re-plan (module docstring) for the facing error ``phi`` and the
     box's distance ``d`` to the target: "recover" (``facing.recovery_candidates`` that end within
-    the budget; ``sign_away()`` gives the back-off's sign) when the push has stalled (``stalled``:
-    the periods left in the budget; None if it has not) within ``RECOVER_WITHIN`` with the box off
-    its line, "turn" while the robot faces away, else "push" (``candidates`` for a rollout of
-    ``horizon`` periods)."""
-    if stalled is not None and STILL < d <= RECOVER_WITHIN and abs(phi) > STEER_TOL:
-        fitting = [seq for seq in recovery_candidates(phi, sign_away()) if len(seq) - 1 <= stalled]
+    the budget; ``sign_away()`` gives the back-off's sign) within ``RECOVER_WITHIN`` with the box off
+    its line when a recovery may start (``recover``: the periods left in the budget, given when the
+    push has stalled or the robot faces away from the target; None otherwise), "turn" while the
+    robot faces away, else "push" (``candidates`` for a rollout of ``horizon`` periods). Near the
+    target a robot facing away backs off before it turns: a turn where it stands, beside the box,
+    sweeps the box away."""
+    if recover is not None and STILL < d <= RECOVER_WITHIN and abs(phi) > STEER_TOL:
+        fitting = [seq for seq in recovery_candidates(phi, sign_away()) if len(seq) - 1 <= recover]
         if fitting:  # a recovery must end within the budget
             return "recover", fitting
     if abs(phi) > FACE_TOL and d > STILL:  # the robot faces away from the target: it turns where it stands first

@@ -23,7 +23,8 @@ Rolling shapes push within about 30 deg of n (C, J and J-mirror push the box at 
 the robot's heading), so for |phi| above ``FACE_TOL`` the planner turns the robot first. It turns
 where it stands with sidewinding: sidewinding turns clockwise whether it winds forwards or backwards,
 its mirror counter-clockwise, so forwards then backwards turns it with little travel (measured in
-docs/planning.md). Such a turn turns n with a; only the turn's drift, or the box swept by the body,
+docs/planning.md), and the plant runs such a pair whole (``TURN_PAIR``; re-planned every period, a
+re-plan can choose "backwards, then forwards" again and again, and the robot winds away). Such a turn turns n with a; only the turn's drift, or the box swept by the body,
 can bring the box to the robot's other side.
 
 Between ``STEER_TOL`` and ``FACE_TOL`` a pushing re-plan also offers one period of the smaller turn
@@ -51,6 +52,7 @@ GENTLE = (0.25, 0.25)  # [rad, Hz] amplitude and frequency of a gentle push (nea
 RECOVERY_BACK = (0.25, 0.5)  # [Hz] the back-off's frequencies (C at 0.4 rad)
 RECOVERY_TURNS = (1, 2, 3)  # periods of turning in a recovery
 RECOVERY_TAIL = 3  # a recovery's periods after its turns: roll back, push gently, stop
+TURN_PAIR = 2  # a turning re-plan's periods the plant runs whole: forwards and backwards (``turning_candidates``)
 W_LATERAL = 3.0  # [m per m] the lateral miss's weight in ``miss`` (a default of ``PushOptions.w_lateral``)
 W_APPROACH = 1.0  # [m per m] a turn's weight of the pushing distance: it must end with the box in reach
 
@@ -100,14 +102,16 @@ def _turn_family(phi: float) -> str:
 
 
 def turning_candidates(phi: float) -> list:
-    """The candidate pairs of a turning re-plan for the facing error ``phi``: sidewinding-mirror
-    (counter-clockwise) for phi > 0, sidewinding otherwise, at each of ``TURN_AMPLITUDES``, forwards
-    then backwards and backwards then forwards."""
+    """The candidate sequences of a turning re-plan for the facing error ``phi``: sidewinding-mirror
+    (counter-clockwise) for phi > 0, sidewinding otherwise, at each of ``TURN_AMPLITUDES``, one
+    period forwards and one backwards (or backwards, then forwards), then a stop. The plant runs a
+    chosen pair whole (``TURN_PAIR``): run forwards or backwards alone, sidewinding travels about
+    half a metre a period, and only the two in turn leave the robot near where it stood."""
     family = _turn_family(phi)
     out = []
     for amplitude in TURN_AMPLITUDES:
         ahead, back = Primitive(family, amplitude, TURN_FREQUENCY), Primitive(family, amplitude, -TURN_FREQUENCY)
-        out += [(ahead, back), (back, ahead)]
+        out += [(ahead, back, Primitive("stop")), (back, ahead, Primitive("stop"))]
     return out
 
 

@@ -6,13 +6,15 @@ period T_p (``PushOptions.period``), from the state the run has reached (the pla
 stepper's memory and the plan so far):
 
 1. candidates (:mod:`cobra_ref.planning.choices`, ``choose_candidates``): when the push has stalled
-   (the box came less than ``STALL_MOVE`` nearer its target in ``STALL_PERIODS`` periods) within
+   (``verdicts.stalled_over``: the box came less than 3 mm nearer its target in 3 periods), or the
+   robot faces away from the target (|phi| above ``facing.FACE_TOL``), within
    ``choices.RECOVER_WITHIN`` of the target with the box off its line (|phi| above
    ``facing.STEER_TOL``), recoveries (``facing.recovery_candidates``: back off, turn, roll back,
    push gently; one primitive per period, each rolled out over its whole length; one starts only
    if it ends within the budget), the chosen one's back-off and turns then run without
    re-planning, and its roll back and push re-planned as they come; while the robot faces away
-   from the target (|phi| above ``facing.FACE_TOL``), turns where it stands; otherwise pushes:
+   from the target (|phi| above ``facing.FACE_TOL``), turns where it stands (a pair of periods,
+   forwards and backwards, run whole: ``committed``); otherwise pushes:
    sequences of primitives (:mod:`cobra_ref.planning.primitives`), one per period, the last for
    the rest of the horizon, sampled around the rolling primitive the last plan goes on with
    (``choices.warm_start``: the plan shifted by a period), with the noise from a generator
@@ -38,9 +40,12 @@ stepper's memory and the plan so far):
 
 The plant runs at another time step than the rollouts: by default the figures' 1 ms
 (``PLANT_DT``), the rollouts 2 ms (``ROLLOUT_DT``, half the cost of a re-plan; the plan must not be
-tuned to its own model). The target is the next waypoint until the box passes within ``via_tolerance`` of it, then the goal.
+tuned to its own model). The target is the next waypoint until the box passes within ``via_tolerance`` of it
+(anywhere on its way during a period: ``advance_watching``), then the goal.
 The push ends when the box is within ``tolerance`` of the goal at the end of a period in which
-the robot stopped (the box at rest), or when the budget of simulated time is spent. The plant is
+the robot stopped (the box at rest), when the robot has stopped for ``STALL_PERIODS`` periods in
+a row (``resting``: nothing the planner has brings the box nearer), or when the budget of
+simulated time is spent. The plant is
 one ``simulate.Run`` advanced period by period: replaying the plan (``replay``) takes the same
 steps, bit for bit.
 """
@@ -64,17 +69,17 @@ from ..start import initial_state
 from ..step import StepSettings
 from .cost import effort_term, excess_term, impact_term, robot_weight
 from .choices import choose_candidates, warm_start
-from .facing import RECOVERY_TAIL, W_APPROACH, W_LATERAL, away, facing, miss
+from .verdicts import STALL_PERIODS, gave_up, outlook, stalled_over
+from .facing import FACE_TOL, RECOVERY_TAIL, TURN_PAIR, W_APPROACH, W_LATERAL, away, facing, miss
 from .locomotion import link_centres
-from .primitives import PlanReference, Primitive
+from .primitives import SIDEWINDING, PlanReference, Primitive
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
 ROLLOUT_BATCHES = 2  # a re-plan's candidates go to the executor as this many batches (``replan_batched``)
 PLANTS = ("cobra_ref", "mujoco")
-STALL_PERIODS, STALL_MOVE = 3, 0.003  # a push has stalled when the box came less than 3 mm nearer in 3 periods
 ROLLOUT_DT = 2 * DEFAULT_DT  # [s] the rollouts' time step: the planner predicts in a coarser world than it acts in
 PLANT_DT = DEFAULT_DT  # [s] the plant's: the figures' time step
-PUSH_SPEED = 0.3  # [m/s] about the fastest push measured: no rollout of the single-shooting searches moved the box more than 0.43 m in 1.5 s
+WATCH = 0.05  # [s] the box's way to a waypoint is sampled this often (``advance_watching``)
 
 
 @dataclass(frozen=True)
@@ -236,8 +241,8 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     n_budget = int(round(o.budget / o.period))
     run = _plant(o, plant)(model, settings, q0, qd0, n_period * n_budget)
     cycles, last, moving, aim = [], o.start, o.start, 0
-    boxes, ds, queue, calm = [], [], [], 0  # the box, its distance at each period's start; a recovery's periods; periods since one
-    start, reason, reached = time.perf_counter(), "budget spent", False
+    boxes, ds, queue, calm = [], [], [], 0  # the box, its distance at each period's start; periods run without re-planning; periods since a recovery
+    start, reason, reached = time.perf_counter(), None, False
     notes = outlook(model, q0, targets, o.budget)
     if progress is not None:
         for note in notes:
@@ -251,20 +256,20 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
             t, phi, d0 = run.t, facing(model, run.q, targets[aim]), distance()
             boxes.append(run.q[box:box + 2].copy())
             ds.append(d0)
-            stalled = calm >= STALL_PERIODS and _stalled(ds)
-            if queue:  # a recovery's back-off and turns, run without re-planning
-                mode, pairs, results, best = "recover", [], [{"cost": None}], 0
+            stalled = calm >= STALL_PERIODS and stalled_over(ds)
+            if queue:  # the rest of a chosen recovery's back-off and turns, or of a turn pair: no re-plan
+                pairs, results, best = [], [{"cost": None}], 0
                 last = queue.pop(0)
             else:
+                recover = n_budget - k if stalled or abs(phi) > FACE_TOL else None  # the periods left for one
                 mode, pairs = choose_candidates(phi, d0, moving, np.random.default_rng([o.seed, k]), o.samples,
-                                                n_budget - k if stalled else None, lambda: away(model, run.q),
-                                                o.horizon)
+                                                recover, lambda: away(model, run.q), o.horizon)
                 best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, mode == "turn"), executor)
-                last, queue = pairs[best][0], list(pairs[best][1:-RECOVERY_TAIL]) if mode == "recover" else []
+                last, queue = pairs[best][0], committed(mode, pairs[best])
             calm = 0 if mode == "recover" else calm + 1
-            moving = moving if mode == "recover" else warm_start(pairs[best], moving)
+            moving = warm_start(pairs[best], moving) if pairs and mode != "recover" else moving
             plan.extend(last, t)
-            run.advance(plan, n_period)
+            closest = advance_watching(run, plan, n_period, box, targets[aim])
             d = distance()
             cycles.append({"t": t, "facing": float(np.degrees(phi)), "mode": mode,
                            "chosen": last.to_dict(), "predicted_cost": results[best]["cost"],
@@ -275,12 +280,14 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
             if progress is not None:
                 progress(f"t = {run.t:5.1f} s  phi {np.degrees(phi):+6.1f} deg  {_name(last):<41} box {100 * d:6.2f} cm from "
                          f"{'the goal' if aim == len(targets) - 1 else f'waypoint {aim + 1}'}")
-            if aim < len(targets) - 1 and d <= o.via_tolerance:
+            if aim < len(targets) - 1 and closest <= o.via_tolerance:  # passed during the period
                 aim, calm = aim + 1, 0  # a new target: its stall is measured from here
-            elif aim == len(targets) - 1 and d <= o.tolerance and last.family == "stop":
-                reason, reached = "the box is at the goal", True
+            elif aim == len(targets) - 1 and last.family == "stop" and (d <= o.tolerance or resting(plan)):
+                reached = d <= o.tolerance
+                reason = "the box is at the goal" if reached else (
+                    f"the robot rests {100 * d:.2f} cm from the goal: {STALL_PERIODS} re-plans in a row chose to stop")
                 break
-        reason = reason if reached else gave_up(boxes + [run.q[box:box + 2].copy()], ds + [distance()])
+        reason = reason or gave_up(boxes + [run.q[box:box + 2].copy()], ds + [distance()])
     except KeyboardInterrupt as exc:
         exc.result = PushResult(run.finish("interrupted"), plan, cycles, targets[-1], False, "interrupted",
                                 time.perf_counter() - start, notes)
@@ -288,43 +295,35 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     return PushResult(run.finish(), plan, cycles, targets[-1], reached, reason, time.perf_counter() - start, notes)
 
 
-def outlook(model, q, targets: list, budget: float) -> list:
-    """What keeps the ``targets`` (world (x, y), the goal last) out of reach or hard within the
-    ``budget`` [s], said before the push starts: a path longer than the fastest push covers
-    (``PUSH_SPEED``), and a first target on the robot's side of the box (|phi| > 90 deg: the robot
-    must turn or go round the box before it pushes, and its primitives do that slowly)."""
-    notes = []
-    box = model.q_idx[model.boxes[0].body].start
-    path = np.vstack([q[box:box + 2]] + [np.asarray(t, dtype=float) for t in targets])
-    length = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
-    if length > PUSH_SPEED * budget:
-        notes.append(f"the box's way is {length:.2f} m; the fastest push measured moves it {PUSH_SPEED:g} m/s, "
-                     f"{PUSH_SPEED * budget:.2f} m in the budget: out of reach")
-    phi = facing(model, q, targets[0])
-    if abs(phi) > np.pi / 2:
-        notes.append(f"the {'first waypoint' if len(targets) > 1 else 'goal'} lies on the robot's side of the box "
-                     f"(facing error {np.degrees(phi):+.0f} deg): the robot must turn or go round the box before it "
-                     "pushes, which its primitives do slowly")
-    return notes
+def advance_watching(run, plan: PlanReference, n_steps: int, box: int, target) -> float:
+    """Advance the plant ``run`` by ``n_steps`` steps of ``plan`` and return the box centre's
+    closest distance [m] to ``target`` on its way, sampled every ``WATCH`` seconds and at the end:
+    a waypoint the box passes between two re-plans is passed. The steps are those of one
+    ``advance`` of ``n_steps`` (a run's step depends on its state, not on how it is called)."""
+    every = max(1, int(round(WATCH / run.settings.dt)))
+    target, closest = np.asarray(target, dtype=float), np.inf
+    for n in [every] * (n_steps // every) + ([n_steps % every] if n_steps % every else []):
+        run.advance(plan, n)
+        closest = min(closest, float(np.linalg.norm(run.q[box:box + 2] - target)))
+    return closest
 
 
-def gave_up(boxes: list, ds: list) -> str:
-    """The reason a push that spent its budget gives, from the box's position (``boxes``) and its
-    distance [m] to its target (``ds``) at each period's start and at the end: it never moved, the
-    push stalled (the box came less than ``STALL_MOVE`` nearer in the last ``STALL_PERIODS``
-    periods), or it was still pushing."""
-    boxes, d = np.asarray(boxes), ds[-1]
-    if np.max(np.linalg.norm(boxes - boxes[0], axis=1)) < STALL_MOVE:
-        return "budget spent: the robot never moved the box"
-    if _stalled(ds):
-        return f"budget spent: the push stalled {100 * d:.2f} cm from its target"
-    return f"budget spent: still pushing, {100 * d:.2f} cm from its target"
+def resting(plan: PlanReference) -> bool:
+    """Whether the last ``STALL_PERIODS`` periods of ``plan`` all stopped: every re-plan predicted
+    that no candidate brings the box nearer than where it lies, and the push ends there."""
+    last = plan.primitives[-STALL_PERIODS:]
+    return len(last) == STALL_PERIODS and all(p.family == "stop" for p in last)
 
 
-def _stalled(ds: list) -> bool:
-    """Whether the box came less than ``STALL_MOVE`` nearer its target over the last
-    ``STALL_PERIODS`` periods, from its distances ``ds`` [m] at each period's start (the last: now)."""
-    return len(ds) > STALL_PERIODS and ds[-1 - STALL_PERIODS] - ds[-1] < STALL_MOVE
+def committed(mode: str, sequence: tuple) -> list:
+    """The periods after the first of a chosen ``sequence`` that the plant runs without re-planning:
+    a recovery's back-off and turns (all but its last ``facing.RECOVERY_TAIL``), a turn's second half
+    (``facing.TURN_PAIR``: sidewinding forwards and backwards in turn), nothing of a push."""
+    if mode == "recover":
+        return list(sequence[1:-RECOVERY_TAIL])
+    if mode == "turn" and sequence[0].family in SIDEWINDING:
+        return list(sequence[1:TURN_PAIR])
+    return []
 
 
 def replan(jobs: list, predict, executor=None) -> tuple[int, list]:

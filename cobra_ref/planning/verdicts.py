@@ -1,0 +1,53 @@
+"""What a push says about its task (:mod:`cobra_ref.planning.receding`): up front, what keeps a
+goal out of reach or makes it hard (``outlook``); when the budget is spent, why it gave up
+(``gave_up``); and the stall test both the loop and ``gave_up`` read (``stalled_over``): a push has
+stalled when the box came less than ``STALL_MOVE`` nearer its target in ``STALL_PERIODS`` periods.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .facing import facing
+
+STALL_PERIODS, STALL_MOVE = 3, 0.003  # a push has stalled when the box came less than 3 mm nearer in 3 periods
+PUSH_SPEED = 0.3  # [m/s] about the fastest push measured: no rollout of the single-shooting searches moved the box more than 0.43 m in 1.5 s
+
+
+def outlook(model, q, targets: list, budget: float) -> list:
+    """What keeps the ``targets`` (world (x, y), the goal last) out of reach or hard within the
+    ``budget`` [s], said before the push starts: a path longer than the fastest push covers
+    (``PUSH_SPEED``), and a first target on the robot's side of the box (|phi| > 90 deg: the robot
+    must turn or go round the box before it pushes, and its primitives do that slowly)."""
+    notes = []
+    box = model.q_idx[model.boxes[0].body].start
+    path = np.vstack([q[box:box + 2]] + [np.asarray(t, dtype=float) for t in targets])
+    length = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
+    if length > PUSH_SPEED * budget:
+        notes.append(f"the box's way is {length:.2f} m; the fastest push measured moves it {PUSH_SPEED:g} m/s, "
+                     f"{PUSH_SPEED * budget:.2f} m in the budget: out of reach")
+    phi = facing(model, q, targets[0])
+    if abs(phi) > np.pi / 2:
+        notes.append(f"the {'first waypoint' if len(targets) > 1 else 'goal'} lies on the robot's side of the box "
+                     f"(facing error {np.degrees(phi):+.0f} deg): the robot must turn or go round the box before it "
+                     "pushes, which its primitives do slowly")
+    return notes
+
+
+def gave_up(boxes: list, ds: list) -> str:
+    """The reason a push that spent its budget gives, from the box's position (``boxes``) and its
+    distance [m] to its target (``ds``) at each period's start and at the end: it never moved, the
+    push stalled (the box came less than ``STALL_MOVE`` nearer in the last ``STALL_PERIODS``
+    periods), or it was still pushing."""
+    boxes, d = np.asarray(boxes), ds[-1]
+    if np.max(np.linalg.norm(boxes - boxes[0], axis=1)) < STALL_MOVE:
+        return "budget spent: the robot never moved the box"
+    if stalled_over(ds):
+        return f"budget spent: the push stalled {100 * d:.2f} cm from its target"
+    return f"budget spent: still pushing, {100 * d:.2f} cm from its target"
+
+
+def stalled_over(ds: list) -> bool:
+    """Whether the box came less than ``STALL_MOVE`` nearer its target over the last
+    ``STALL_PERIODS`` periods, from its distances ``ds`` [m] at each period's start (the last: now)."""
+    return len(ds) > STALL_PERIODS and ds[-1 - STALL_PERIODS] - ds[-1] < STALL_MOVE
