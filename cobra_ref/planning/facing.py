@@ -24,7 +24,8 @@ the robot's heading), so for |phi| above ``FACE_TOL`` the planner turns the robo
 where it stands with sidewinding: sidewinding turns clockwise whether it winds forwards or backwards,
 its mirror counter-clockwise, so forwards then backwards turns it with little travel (measured in
 docs/planning.md), and the plant runs such a pair whole (``TURN_PAIR``; re-planned every period, a
-re-plan can choose "backwards, then forwards" again and again, and the robot winds away). Such a turn turns n with a; only the turn's drift, or the box swept by the body,
+re-plan can choose "backwards, then forwards" again and again, and the robot winds away) unless its
+first period already faced the robot towards the target. Such a turn turns n with a; only the turn's drift, or the box swept by the body,
 can bring the box to the robot's other side.
 
 Between ``STEER_TOL`` and ``FACE_TOL`` a pushing re-plan also offers one period of the smaller turn

@@ -7,14 +7,14 @@ stepper's memory and the plan so far):
 
 1. candidates (:mod:`cobra_ref.planning.choices`, ``choose_candidates``): when the push has stalled
    (``verdicts.stalled_over``: the box came less than 3 mm nearer its target in 3 periods), or the
-   robot faces away from the target (|phi| above ``facing.FACE_TOL``), within
-   ``choices.RECOVER_WITHIN`` of the target with the box off its line (|phi| above
-   ``facing.STEER_TOL``), recoveries (``facing.recovery_candidates``: back off, turn, roll back,
-   push gently; one primitive per period, each rolled out over its whole length; one starts only
-   if it ends within the budget), the chosen one's back-off and turns then run without
+   robot faces away from the target (|phi| above ``facing.FACE_TOL``; not within the re-planned
+   tail of a recovery), within ``choices.RECOVER_WITHIN`` of the target with the box off its line
+   (|phi| above ``facing.STEER_TOL``), recoveries (``facing.recovery_candidates``: back off, turn,
+   roll back, push gently; one primitive per period, each rolled out over its whole length; one
+   starts only if it ends within the budget), the chosen one's back-off and turns then run without
    re-planning, and its roll back and push re-planned as they come; while the robot faces away
-   from the target (|phi| above ``facing.FACE_TOL``), turns where it stands (a pair of periods,
-   forwards and backwards, run whole: ``committed``); otherwise pushes:
+   from the target, turns where it stands (a pair of periods, forwards and backwards, run whole,
+   ``committed``, unless the first already faced the robot towards the target); otherwise pushes:
    sequences of primitives (:mod:`cobra_ref.planning.primitives`), one per period, the last for
    the rest of the horizon, sampled around the rolling primitive the last plan goes on with
    (``choices.warm_start``: the plan shifted by a period), with the noise from a generator
@@ -240,13 +240,12 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     n_period = int(round(o.period / settings.dt))
     n_budget = int(round(o.budget / o.period))
     run = _plant(o, plant)(model, settings, q0, qd0, n_period * n_budget)
-    cycles, last, moving, aim = [], o.start, o.start, 0
+    cycles, last, moving, aim, mode = [], o.start, o.start, 0, "push"
     boxes, ds, queue, calm = [], [], [], 0  # the box, its distance at each period's start; periods run without re-planning; periods since a recovery
     start, reason, reached = time.perf_counter(), None, False
     notes = outlook(model, q0, targets, o.budget)
-    if progress is not None:
-        for note in notes:
-            progress(f"note: {note}")
+    for note in notes if progress is not None else []:
+        progress(f"note: {note}")
 
     def distance() -> float:  # the box centre to the current target [m]
         return float(np.linalg.norm(run.q[box:box + 2] - np.asarray(targets[aim])))
@@ -257,11 +256,14 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
             boxes.append(run.q[box:box + 2].copy())
             ds.append(d0)
             stalled = calm >= STALL_PERIODS and stalled_over(ds)
+            if mode == "turn" and abs(phi) <= FACE_TOL:
+                queue = []  # a turn pair's first half already faced the robot towards the target
             if queue:  # the rest of a chosen recovery's back-off and turns, or of a turn pair: no re-plan
                 pairs, results, best = [], [{"cost": None}], 0
                 last = queue.pop(0)
             else:
-                recover = n_budget - k if stalled or abs(phi) > FACE_TOL else None  # the periods left for one
+                # the periods left for a recovery: after a stall, or facing away (not within a recovery's re-planned tail)
+                recover = n_budget - k if stalled or (abs(phi) > FACE_TOL and calm >= STALL_PERIODS) else None
                 mode, pairs = choose_candidates(phi, d0, moving, np.random.default_rng([o.seed, k]), o.samples,
                                                 recover, lambda: away(model, run.q), o.horizon)
                 best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, mode == "turn"), executor)
@@ -282,10 +284,8 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
                          f"{'the goal' if aim == len(targets) - 1 else f'waypoint {aim + 1}'}")
             if aim < len(targets) - 1 and closest <= o.via_tolerance:  # passed during the period
                 aim, calm = aim + 1, 0  # a new target: its stall is measured from here
-            elif aim == len(targets) - 1 and last.family == "stop" and (d <= o.tolerance or resting(plan)):
+            elif aim == len(targets) - 1 and (reason := ending(plan, d, o.tolerance)):
                 reached = d <= o.tolerance
-                reason = "the box is at the goal" if reached else (
-                    f"the robot rests {100 * d:.2f} cm from the goal: {STALL_PERIODS} re-plans in a row chose to stop")
                 break
         reason = reason or gave_up(boxes + [run.q[box:box + 2].copy()], ds + [distance()])
     except KeyboardInterrupt as exc:
@@ -306,6 +306,18 @@ def advance_watching(run, plan: PlanReference, n_steps: int, box: int, target) -
         run.advance(plan, n)
         closest = min(closest, float(np.linalg.norm(run.q[box:box + 2] - target)))
     return closest
+
+
+def ending(plan: PlanReference, d: float, tolerance: float) -> str | None:
+    """Why the push ends after a period that left the box ``d`` [m] from the goal, or None: the
+    robot stopped with the box within ``tolerance``, or it has rested (``resting``)."""
+    if plan.primitives[-1].family != "stop":
+        return None
+    if d <= tolerance:
+        return "the box is at the goal"
+    if resting(plan):
+        return f"the robot rests {100 * d:.2f} cm from the goal: {STALL_PERIODS} re-plans in a row chose to stop"
+    return None
 
 
 def resting(plan: PlanReference) -> bool:
