@@ -158,3 +158,20 @@ def test_each_replan_chooses_its_mode_from_the_measured_state(phi, d, may_recove
                                  lambda: -1.0)[0] == "turn"
     if mode == "turn":
         assert {pair[0].family for pair in pairs[:4]} == {"sidewinding-mirror"}
+
+
+@pytest.mark.parametrize("after_first, replanned", [(0.8, False), (0.1, True)])
+def test_a_turn_pair_s_second_half_runs_unless_the_first_faced_the_robot_to_the_target(monkeypatch, after_first,
+                                                                                         replanned):
+    # the facing error read at each period's start is set by hand: 0.8 rad (beyond FACE_TOL: turn),
+    # then after_first; still facing away, the pair's second half runs without a re-plan; facing
+    # the target already, it is dropped and the next period re-planned as a push
+    from cobra_ref.infra.executors import SerialExecutor
+    from cobra_ref.planning import receding
+    from test_push import TINY
+
+    readings = iter([0.8, after_first])
+    monkeypatch.setattr(receding, "facing", lambda model, q, target: next(readings))
+    first, second = receding.push(replace(TINY, goal=(0.0, 0.2), budget=0.2), SerialExecutor()).cycles
+    assert first["mode"] == "turn" and abs(np.radians(second["facing"]) - after_first) < 1e-12
+    assert (second["rollouts"] > 0) == replanned and (second["mode"] == "push") == replanned

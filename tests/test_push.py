@@ -261,7 +261,7 @@ def test_a_push_that_spends_its_budget_says_why():
 def test_a_push_ends_when_the_robot_has_rested_for_three_periods():
     # three re-plans in a row chose to stop: nothing the planner has brings the box nearer
     from cobra_ref.planning.primitives import PlanReference
-    from cobra_ref.planning.receding import resting
+    from cobra_ref.planning.receding import ending, resting
     from cobra_ref.planning.verdicts import STALL_PERIODS
 
     on, stop = Primitive("C"), Primitive("stop")
@@ -269,10 +269,12 @@ def test_a_push_ends_when_the_robot_has_rested_for_three_periods():
     for k, p in enumerate([on] + [stop] * (STALL_PERIODS - 1)):
         plan.extend(p, float(k))
     assert not resting(plan)  # two stops after a push
+    assert ending(plan, 0.012, 0.01) is None and ending(plan, 0.008, 0.01) == "the box is at the goal"
     plan.extend(stop, float(STALL_PERIODS))
     assert resting(plan)
+    assert ending(plan, 0.012, 0.01) == "the robot rests 1.20 cm from the goal: 3 re-plans in a row chose to stop"
     plan.extend(on, 10.0)
-    assert not resting(plan)
+    assert not resting(plan) and ending(plan, 0.008, 0.01) is None  # at the goal, but still rolling
 
 
 def test_the_box_passes_a_waypoint_anywhere_on_its_way_during_a_period():
