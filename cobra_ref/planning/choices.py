@@ -3,10 +3,11 @@
 Each candidate is a sequence of primitives, one per period, the last for the rest of the horizon
 (a pair: the next period and the rest). Which ones a re-plan rolls out depends on the state it
 starts from (``choose_candidates``): a stalled push near its target, or a robot facing away from
-it there, recovers (``facing.recovery_candidates``), a robot facing away from the target turns where it stands
-(``facing.turning_candidates``), and otherwise it pushes (``candidates``): predictive sampling
-around the rolling primitive the last plan goes on with (``warm_start``), with the deterministic
-variations a push needs near its target (stops, rolling back, gentle pushes, shorter pushes).
+it there, recovers (``facing.recovery_candidates``), a robot facing away from the target turns
+where it stands (``facing.turning_candidates``), and otherwise it pushes (``candidates``):
+predictive sampling around the rolling primitive the last plan goes on with (``warm_start``), with
+the deterministic variations a push needs near its target (stops, rolling back, gentle pushes,
+shorter pushes).
 """
 
 from __future__ import annotations
