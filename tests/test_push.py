@@ -230,7 +230,7 @@ def test_a_goal_on_the_robots_side_or_beyond_the_budget_is_said_up_front():
     # the start: C with the box on its concave side, pushed along +x; 0.25 m ahead is plain, 0.25 m
     # behind lies on the robot's side (it must go round the box), 12 m ahead is beyond 0.3 m/s for 30 s
     from cobra_ref.planning.primitives import PlanReference
-    from cobra_ref.planning.verdicts import PUSH_SPEED, outlook
+    from cobra_ref.planning.reasons import PUSH_SPEED, outlook
     from cobra_ref.robots import cobra_model
     from cobra_ref.start import initial_state
 
@@ -245,7 +245,7 @@ def test_a_goal_on_the_robots_side_or_beyond_the_budget_is_said_up_front():
 
 
 def test_a_push_that_spends_its_budget_says_why():
-    from cobra_ref.planning.verdicts import gave_up
+    from cobra_ref.planning.reasons import gave_up
 
     # the box at each period's start and at the end, and its distance to the target
     still = [(0.0, 0.0), (0.001, 0.0), (0.0, 0.001), (0.002, 0.0), (0.001, 0.0)]
@@ -262,7 +262,7 @@ def test_a_push_ends_when_the_robot_has_rested_for_three_periods():
     # three re-plans in a row chose to stop: nothing the planner has brings the box nearer
     from cobra_ref.planning.primitives import PlanReference
     from cobra_ref.planning.receding import ending, resting
-    from cobra_ref.planning.verdicts import STALL_PERIODS
+    from cobra_ref.planning.reasons import STALL_PERIODS
 
     on, stop = Primitive("C"), Primitive("stop")
     plan = PlanReference(on)

@@ -9,7 +9,7 @@ The closed loop (``cobra-ref push``) is read after it: ``primitives`` (the per-p
 primitives and the joint reference they chain into), ``locomotion`` (where each primitive takes the
 robot alone), ``facing`` (which way the robot can push the box, and the turns that face it towards
 the target), ``choices`` (the candidates of one re-plan), ``receding`` (the receding-horizon planner),
-``verdicts`` (what a push says of its task, up front and when it gives up), ``benchmark`` (its goals
+``reasons`` (what a push says of its task, up front and when it gives up), ``benchmark`` (its goals
 around the box).
 """
 

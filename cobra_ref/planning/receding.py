@@ -6,7 +6,7 @@ period T_p (``PushOptions.period``), from the state the run has reached (the pla
 stepper's memory and the plan so far):
 
 1. candidates (:mod:`cobra_ref.planning.choices`, ``choose_candidates``): when the push has stalled
-   (``verdicts.stalled_over``: the box came less than 3 mm nearer its target in 3 periods), or the
+   (``reasons.stalled_over``: the box came less than 3 mm nearer its target in 3 periods), or the
    robot faces away from the target (|phi| above ``facing.FACE_TOL``; not within the re-planned
    tail of a recovery), within ``choices.RECOVER_WITHIN`` of the target with the box off its line
    (|phi| above ``facing.STEER_TOL``), recoveries (``facing.recovery_candidates``: back off, turn,
@@ -69,7 +69,7 @@ from ..start import initial_state
 from ..step import StepSettings
 from .cost import effort_term, excess_term, impact_term, robot_weight
 from .choices import choose_candidates, warm_start
-from .verdicts import STALL_PERIODS, gave_up, outlook, stalled_over
+from .reasons import STALL_PERIODS, gave_up, outlook, stalled_over
 from .facing import FACE_TOL, RECOVERY_TAIL, TURN_PAIR, W_APPROACH, W_LATERAL, away, facing, miss
 from .locomotion import link_centres
 from .primitives import SIDEWINDING, PlanReference, Primitive
