@@ -106,13 +106,13 @@ def turning_candidates(phi: float) -> list:
     """The candidate sequences of a turning re-plan for the facing error ``phi``: sidewinding-mirror
     (counter-clockwise) for phi > 0, sidewinding otherwise, at each of ``TURN_AMPLITUDES``, one
     period forwards and one backwards (or backwards, then forwards), then a stop. The plant runs a
-    chosen pair whole (``TURN_PAIR``): run forwards or backwards alone, sidewinding travels about
-    half a metre a period, and only the two in turn leave the robot near where it stood."""
-    family = _turn_family(phi)
+    chosen pair whole (``TURN_PAIR``): run forwards or backwards alone, sidewinding travels far (the
+    travel map in docs/planning.md), and only the two in turn leave the robot near where it stood."""
+    family, stop = _turn_family(phi), Primitive("stop")
     out = []
     for amplitude in TURN_AMPLITUDES:
         ahead, back = Primitive(family, amplitude, TURN_FREQUENCY), Primitive(family, amplitude, -TURN_FREQUENCY)
-        out += [(ahead, back, Primitive("stop")), (back, ahead, Primitive("stop"))]
+        out += [(ahead, back, stop), (back, ahead, stop)]
     return out
 
 

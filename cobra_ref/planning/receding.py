@@ -69,10 +69,10 @@ from ..start import initial_state
 from ..step import StepSettings
 from .cost import effort_term, excess_term, impact_term, robot_weight
 from .choices import choose_candidates, warm_start
-from .reasons import STALL_PERIODS, gave_up, outlook, stalled_over
 from .facing import FACE_TOL, RECOVERY_TAIL, TURN_PAIR, W_APPROACH, W_LATERAL, away, facing, miss
 from .locomotion import link_centres
 from .primitives import SIDEWINDING, PlanReference, Primitive
+from .reasons import STALL_PERIODS, gave_up, outlook, stalled_over
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
 ROLLOUT_BATCHES = 2  # a re-plan's candidates go to the executor as this many batches (``replan_batched``)
@@ -244,7 +244,7 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     boxes, ds, queue, calm = [], [], [], 0  # the box, its distance at each period's start; periods run without re-planning; periods since a recovery
     start, reason, reached = time.perf_counter(), None, False
     notes = outlook(model, q0, targets, o.budget)
-    for note in notes if progress is not None else []:
+    for note in notes if progress is not None else ():
         progress(f"note: {note}")
 
     def distance() -> float:  # the box centre to the current target [m]
@@ -255,15 +255,14 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
             t, phi, d0 = run.t, facing(model, run.q, targets[aim]), distance()
             boxes.append(run.q[box:box + 2].copy())
             ds.append(d0)
-            stalled = calm >= STALL_PERIODS and stalled_over(ds)
             if mode == "turn" and abs(phi) <= FACE_TOL:
                 queue = []  # a turn pair's first half already faced the robot towards the target
             if queue:  # the rest of a chosen recovery's back-off and turns, or of a turn pair: no re-plan
                 pairs, results, best = [], [{"cost": None}], 0
                 last = queue.pop(0)
             else:
-                # the periods left for a recovery: after a stall, or facing away (not within a recovery's re-planned tail)
-                recover = n_budget - k if stalled or (abs(phi) > FACE_TOL and calm >= STALL_PERIODS) else None
+                # the periods left for a recovery (not within a recovery's re-planned tail): after a stall, or facing away
+                recover = n_budget - k if calm >= STALL_PERIODS and (stalled_over(ds) or abs(phi) > FACE_TOL) else None
                 mode, pairs = choose_candidates(phi, d0, moving, np.random.default_rng([o.seed, k]), o.samples,
                                                 recover, lambda: away(model, run.q), o.horizon)
                 best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, mode == "turn"), executor)
@@ -301,9 +300,11 @@ def advance_watching(run, plan: PlanReference, n_steps: int, box: int, target) -
     a waypoint the box passes between two re-plans is passed. The steps are those of one
     ``advance`` of ``n_steps`` (a run's step depends on its state, not on how it is called)."""
     every = max(1, int(round(WATCH / run.settings.dt)))
-    target, closest = np.asarray(target, dtype=float), np.inf
-    for n in [every] * (n_steps // every) + ([n_steps % every] if n_steps % every else []):
+    target, closest, done = np.asarray(target, dtype=float), np.inf, 0
+    while done < n_steps:
+        n = min(every, n_steps - done)
         run.advance(plan, n)
+        done += n
         closest = min(closest, float(np.linalg.norm(run.q[box:box + 2] - target)))
     return closest
 
