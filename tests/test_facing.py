@@ -133,31 +133,36 @@ def test_a_recovery_backs_off_turns_towards_the_target_rolls_back_and_pushes_gen
     assert {p.family for seq in recovery_candidates(-0.5, -1.0) for p in seq[1:-RECOVERY_TAIL]} == {"sidewinding"}
 
 
-@pytest.mark.parametrize("phi, d, may_recover, mode", [
+@pytest.mark.parametrize("phi, d, may_recover, modes", [
     # may_recover: the push stalled, or the robot faces away (receding.push gives the periods left then)
-    (0.5, 0.03, True, "recover"),  # near the target, the box off the line
-    (0.5, 0.2, True, "turn"),  # too far for a recovery: turn where it stands
-    (0.1, 0.03, True, "push"),  # stalled on the line: no turn would help
-    (0.5, 0.03, False, "turn"), (0.5, 0.01, False, "push"),  # within 2 cm nothing but pushes and stops
-    (0.1, 0.2, False, "push"),
+    (0.5, 0.03, True, {"turn", "recover", "push"}),  # near the target, the box off the line: turns, recoveries, a stop
+    (0.3, 0.05, True, {"push", "recover"}),  # a stalled push, the box off its line: pushes, recoveries, a stop
+    (0.5, 0.2, True, {"turn"}),  # too far for a recovery: turn where it stands
+    (0.1, 0.03, True, {"push"}),  # stalled on the line: no turn would help
+    (0.5, 0.03, False, {"turn"}), (0.5, 0.01, False, {"push"}),  # within 2 cm nothing but pushes and stops
+    (0.1, 0.2, False, {"push"}),
 ])
-def test_each_replan_chooses_its_mode_from_the_measured_state(phi, d, may_recover, mode):
+def test_each_replan_chooses_its_candidates_from_the_measured_state(phi, d, may_recover, modes):
     from cobra_ref.planning.choices import choose_candidates
 
-    chosen, pairs = choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2,
-                                      100 if may_recover else None, lambda: -1.0)
-    assert chosen == mode and pairs
-    if mode == "recover":
-        assert all(len(seq) >= 5 for seq in pairs)
+    def chosen(periods_left):
+        return choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2, periods_left,
+                                 lambda: -1.0)
+
+    out = chosen(100 if may_recover else None)
+    assert {mode for mode, _ in out} == modes
+    recoveries = [seq for mode, seq in out if mode == "recover"]
+    if recoveries:
+        # a recovery is compared with staying put: a stop for the whole horizon is a candidate
+        assert ("push", (Primitive("stop"), Primitive("stop"))) in out
+        assert all(len(seq) >= 5 for seq in recoveries)
         # a recovery runs its periods but the final stop whole: only those that end within the budget
-        shortest = min(len(seq) for seq in pairs) - 1
-        fitting = choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2, shortest,
-                                    lambda: -1.0)[1]
+        shortest = min(len(seq) for seq in recoveries) - 1
+        fitting = [seq for mode, seq in chosen(shortest) if mode == "recover"]
         assert fitting and all(len(seq) - 1 <= shortest for seq in fitting)
-        assert choose_candidates(phi, d, Primitive("C", 0.4, 0.5), np.random.default_rng(0), 2, shortest - 1,
-                                 lambda: -1.0)[0] == "turn"
-    if mode == "turn":
-        assert {pair[0].family for pair in pairs[:4]} == {"sidewinding-mirror"}
+        assert "recover" not in {mode for mode, _ in chosen(shortest - 1)}
+    if "turn" in modes:
+        assert {seq[0].family for mode, seq in out[:4]} == {"sidewinding-mirror"}
 
 
 @pytest.mark.parametrize("after_first, replanned", [(0.8, False), (0.1, True)])

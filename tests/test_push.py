@@ -80,6 +80,14 @@ def test_a_replans_candidates_cost_the_same_in_a_batch_as_one_by_one():
     batched = candidate_costs(jobs)
     assert [r["cost"] for r in batched] == [candidate_cost(job)["cost"] for job in jobs]
     assert len({r["cost"] for r in batched}) == 4  # four different first periods, four different rollouts
+    # a re-plan's batches do not mix rollout lengths: a longer sequence (a recovery's) among the
+    # pairs leaves every cost as its own rollout's, and the cheapest is chosen
+    from cobra_ref.planning.receding import replan_batched
+    longer = Rollout(plan.to_dict(), (Primitive("C", 0.4, -0.5), Primitive("stop"), Primitive("stop")), 0.0, q0, qd0,
+                     None, (0.3, 0.0), TINY)
+    best, results = replan_batched(jobs[:2] + [longer] + jobs[2:])
+    alone = [candidate_cost(job)["cost"] for job in jobs[:2] + [longer] + jobs[2:]]
+    assert [r["cost"] for r in results] == alone and best == int(np.argmin(alone))
 
 
 def test_the_plan_replays_to_the_executed_run_bit_for_bit(pushed):

@@ -2,12 +2,12 @@
 
 Each candidate is a sequence of primitives, one per period, the last for the rest of the horizon
 (a pair: the next period and the rest). Which ones a re-plan rolls out depends on the state it
-starts from (``choose_candidates``): a stalled push near its target, or a robot facing away from
-it there, recovers (``facing.recovery_candidates``), a robot facing away from the target turns
-where it stands (``facing.turning_candidates``), and otherwise it pushes (``candidates``):
-predictive sampling around the rolling primitive the last plan goes on with (``warm_start``), with
-the deterministic variations a push needs near its target (stops, rolling back, gentle pushes,
-shorter pushes).
+starts from (``choose_candidates``): a robot facing away from the target turns where it stands
+(``facing.turning_candidates``), otherwise it pushes (``candidates``), and a stalled push near its
+target, or a robot facing away from it there, may also recover (``facing.recovery_candidates``).
+Pushes are predictive sampling around the rolling primitive the last plan goes on with
+(``warm_start``), with the deterministic variations a push needs near its target (stops, rolling
+back, gentle pushes, shorter pushes).
 """
 
 from __future__ import annotations
@@ -26,24 +26,30 @@ FINAL = 0.1  # [m] within this of the target the noisy samples push for fewer pe
 
 
 def choose_candidates(phi: float, d: float, moving: Primitive, rng: np.random.Generator, samples: int,
-                      recover: int | None, sign_away, horizon: int = 2) -> tuple[str, list]:
-    """(mode, candidates) of one re-plan (module docstring) for the facing error ``phi`` and the
-    box's distance ``d`` to the target: "recover" (``facing.recovery_candidates`` that end within
-    the budget; ``sign_away()`` gives the back-off's sign) within ``RECOVER_WITHIN`` with the box off
-    its line when a recovery may start (``recover``: the periods left in the budget, given when the
-    push has stalled or the robot faces away from the target; None otherwise), "turn" while the
-    robot faces away, else "push" (``candidates`` for a rollout of ``horizon`` periods). Near the
-    target a robot facing away backs off before it turns: a turn where it stands, beside the box,
-    sweeps the box away."""
-    if recover is not None and STILL < d <= RECOVER_WITHIN and abs(phi) > STEER_TOL:
-        fitting = [seq for seq in recovery_candidates(phi, sign_away()) if len(seq) - 1 <= recover]
-        if fitting:  # a recovery must end within the budget
-            return "recover", fitting
+                      recover: int | None, sign_away, horizon: int = 2) -> list:
+    """The candidates of one re-plan (module docstring), each with its mode: [(mode, sequence), ...]
+    for the facing error ``phi`` and the box's distance ``d`` to the target. While the robot faces
+    away from the target, "turn" (``facing.turning_candidates``, and the gentle pushes near the
+    target), else "push" (``candidates`` for a rollout of ``horizon`` periods). Within
+    ``RECOVER_WITHIN`` of the target with the box off its line, when a recovery may start
+    (``recover``: the periods left in the budget, given when the push has stalled or the robot faces
+    away from the target; None otherwise), "recover" (``facing.recovery_candidates`` that end within
+    the budget; ``sign_away()`` gives the back-off's sign) and a stop are compared with those: a
+    recovery runs only if its rollout predicts that it brings the box nearer than staying put or
+    going on would (a back-off beside the box can drag it along)."""
     if abs(phi) > FACE_TOL and d > STILL:  # the robot faces away from the target: it turns where it stands first
-        return "turn", turning_candidates(phi) + (gentle(moving) if d <= NEAR else [])
-    return "push", (candidates(moving, rng, samples, near=d <= NEAR, still=d <= STILL, horizon=horizon,
-                               final=d <= FINAL)
-                    + steering_candidates(phi, moving))
+        out = [("turn", seq) for seq in turning_candidates(phi) + (gentle(moving) if d <= NEAR else [])]
+    else:
+        out = [("push", seq) for seq in candidates(moving, rng, samples, near=d <= NEAR, still=d <= STILL,
+                                                   horizon=horizon, final=d <= FINAL)
+               + steering_candidates(phi, moving)]
+    if recover is not None and STILL < d <= RECOVER_WITHIN and abs(phi) > STEER_TOL:
+        # a recovery must end within the budget; near the target a robot facing away would rather
+        # back off before it turns (a turn where it stands, beside the box, sweeps the box away)
+        fitting = [("recover", seq) for seq in recovery_candidates(phi, sign_away()) if len(seq) - 1 <= recover]
+        stop = Primitive("stop")
+        out += fitting + ([("push", (stop, stop))] if fitting and ("push", (stop, stop)) not in out else [])
+    return out
 
 
 def candidates(moving: Primitive, rng: np.random.Generator, samples: int, near: bool = True,

@@ -5,20 +5,21 @@ specified point, and corresponding suitable joint commands are derived", closed 
 period T_p (``PushOptions.period``), from the state the run has reached (the plant's q, qd, its
 stepper's memory and the plan so far):
 
-1. candidates (:mod:`cobra_ref.planning.choices`, ``choose_candidates``): when the push has stalled
-   (``reasons.stalled_over``: the box came less than 3 mm nearer its target in 3 periods), or the
-   robot faces away from the target (|phi| above ``facing.FACE_TOL``; not within the re-planned
+1. candidates (:mod:`cobra_ref.planning.choices`, ``choose_candidates``): while the robot faces
+   away from the target (|phi| above ``facing.FACE_TOL``), turns where it stands (a pair of
+   periods, forwards and backwards, run whole, ``committed``, unless the first already faced the
+   robot towards the target); otherwise pushes: sequences of primitives
+   (:mod:`cobra_ref.planning.primitives`), one per period, the last for the rest of the horizon,
+   sampled around the rolling primitive the last plan goes on with (``choices.warm_start``: the
+   plan shifted by a period), with the noise from a generator seeded by ``seed`` and the period's
+   index. When the push has stalled (``reasons.stalled_over``: the box came less than 3 mm nearer
+   its target in 3 periods), or the robot faces away from the target (not within the re-planned
    tail of a recovery), within ``choices.RECOVER_WITHIN`` of the target with the box off its line
-   (|phi| above ``facing.STEER_TOL``), recoveries (``facing.recovery_candidates``: back off, turn,
-   roll back, push gently; one primitive per period, each rolled out over its whole length; one
-   starts only if it ends within the budget), the chosen one's back-off and turns then run without
-   re-planning, and its roll back and push re-planned as they come; while the robot faces away
-   from the target, turns where it stands (a pair of periods, forwards and backwards, run whole,
-   ``committed``, unless the first already faced the robot towards the target); otherwise pushes:
-   sequences of primitives (:mod:`cobra_ref.planning.primitives`), one per period, the last for
-   the rest of the horizon, sampled around the rolling primitive the last plan goes on with
-   (``choices.warm_start``: the plan shifted by a period), with the noise from a generator
-   seeded by ``seed`` and the period's index;
+   (|phi| above ``facing.STEER_TOL``), recoveries and a stop are compared with those
+   (``facing.recovery_candidates``: back off, turn, roll back, push gently; one primitive per
+   period, each rolled out over its whole length; one starts only if it ends within the budget);
+   a chosen recovery's back-off and turns then run without re-planning, and its roll back and push
+   are re-planned as they come;
 2. each candidate is rolled out over the horizon from that state (through the executor, the
    candidates in batches advanced together: ``replan_batched``), and costs, in metres
    (``candidate_cost``)::
@@ -258,15 +259,16 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
             if mode == "turn" and abs(phi) <= FACE_TOL:
                 queue = []  # a turn pair's first half already faced the robot towards the target
             if queue:  # the rest of a chosen recovery's back-off and turns, or of a turn pair: no re-plan
-                pairs, results, best = [], [{"cost": None}], 0
+                modes, pairs, results, best = [mode], [], [{"cost": None}], 0
                 last = queue.pop(0)
             else:
                 # the periods left for a recovery (not within a recovery's re-planned tail): after a stall, or facing away
                 recover = n_budget - k if calm >= STALL_PERIODS and (stalled_over(ds) or abs(phi) > FACE_TOL) else None
-                mode, pairs = choose_candidates(phi, d0, moving, np.random.default_rng([o.seed, k]), o.samples,
-                                                recover, lambda: away(model, run.q), o.horizon)
-                best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, mode == "turn"), executor)
-                last, queue = pairs[best][0], committed(mode, pairs[best])
+                modes, pairs = zip(*choose_candidates(phi, d0, moving, np.random.default_rng([o.seed, k]), o.samples,
+                                                      recover, lambda: away(model, run.q), o.horizon))
+                best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, "turn" in modes), executor)
+                mode, last = modes[best], pairs[best][0]
+                queue = committed(mode, pairs[best])
             calm = 0 if mode == "recover" else calm + 1
             moving = warm_start(pairs[best], moving) if pairs and mode != "recover" else moving
             plan.extend(last, t)
@@ -276,8 +278,8 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
                            "chosen": last.to_dict(), "predicted_cost": results[best]["cost"],
                            "distance": d, "target": list(targets[aim]), "rollouts": len(pairs),
                            "wall_time": time.perf_counter() - start,
-                           "candidates": [{"pair": [_name(p) for p in pair], "cost": r["cost"],
-                                           "distance": r["distance"]} for pair, r in zip(pairs, results)]})
+                           "candidates": [{"mode": m, "pair": [_name(p) for p in pair], "cost": r["cost"],
+                                           "distance": r["distance"]} for m, pair, r in zip(modes, pairs, results)]})
             if progress is not None:
                 progress(f"t = {run.t:5.1f} s  phi {np.degrees(phi):+6.1f} deg  {_name(last):<41} box {100 * d:6.2f} cm from "
                          f"{'the goal' if aim == len(targets) - 1 else f'waypoint {aim + 1}'}")
@@ -348,18 +350,25 @@ def replan(jobs: list, predict, executor=None) -> tuple[int, list]:
 
 
 def replan_batched(jobs: list, executor=None) -> tuple[int, list]:
-    """``replan`` with ``candidate_costs``: the candidates in ``ROLLOUT_BATCHES`` batches (one per
-    worker of a two-core machine), each batch one executor task; the same costs, bit for bit, as
-    one task per candidate."""
-    size = -(-len(jobs) // ROLLOUT_BATCHES)
-    batches = [jobs[i:i + size] for i in range(0, len(jobs), size)]
-    results = [r for batch in (executor or SerialExecutor()).map(candidate_costs, batches) for r in batch]
+    """``replan`` with ``candidate_costs``: the candidates of each rollout length (a recovery's
+    periods, or the horizon) in ``ROLLOUT_BATCHES`` batches (one per worker of a two-core machine),
+    each batch one executor task; the same costs, bit for bit, as one task per candidate (a batch
+    rolls every member out as long as its longest: lengths are not mixed)."""
+    lengths = [max(job.options.horizon, len(job.pair)) for job in jobs]
+    batches = []
+    for n in sorted(set(lengths)):
+        group = [i for i, m in enumerate(lengths) if m == n]
+        size = -(-len(group) // ROLLOUT_BATCHES)
+        batches += [group[i:i + size] for i in range(0, len(group), size)]
+    costs = (executor or SerialExecutor()).map(candidate_costs, [[jobs[i] for i in batch] for batch in batches])
+    by_index = dict(zip((i for batch in batches for i in batch), (r for batch in costs for r in batch)))
+    results = [by_index[i] for i in range(len(jobs))]
     return int(np.argmin([r["cost"] for r in results])), results
 
 
 def _jobs(plan: PlanReference, run: Run, pairs: list, target, options: PushOptions, turning: bool = False) -> list:
     """The ``Rollout`` of every pair from the state ``run`` has reached, in order (``turning``: a
-    turning re-plan's)."""
+    turning re-plan's, its candidates all costed alike)."""
     # the plant's stepper memory (its last velocity, its impulses) holds for rollouts at its own dt only
     memory = run.stepping.memory if run.settings.dt == options.settings.dt else None
     plan_so_far, q, qd = plan.to_dict(), run.q, run.qd  # the same for every candidate
