@@ -34,9 +34,10 @@ def choose_candidates(phi: float, d: float, moving: Primitive, rng: np.random.Ge
     ``RECOVER_WITHIN`` of the target with the box off its line, when a recovery may start
     (``recover``: the periods left in the budget, given when the push has stalled or the robot faces
     away from the target; None otherwise), "recover" (``facing.recovery_candidates`` that end within
-    the budget; ``sign_away()`` gives the back-off's sign) and a stop are compared with those: a
-    recovery runs only if its rollout predicts that it brings the box nearer than staying put or
-    going on would (a back-off beside the box can drag it along)."""
+    the budget; ``sign_away()`` gives the back-off's sign) are compared with those: a recovery runs
+    only if its rollout predicts a better end than the turns or pushes (a back-off beside the box
+    can drag it along). No stop is added: farther than ``STILL`` from the target, standing still
+    often looks the safest choice, and the push would rest short of the goal."""
     if abs(phi) > FACE_TOL and d > STILL:  # the robot faces away from the target: it turns where it stands first
         out = [("turn", seq) for seq in turning_candidates(phi) + (gentle(moving) if d <= NEAR else [])]
     else:
@@ -46,9 +47,7 @@ def choose_candidates(phi: float, d: float, moving: Primitive, rng: np.random.Ge
     if recover is not None and STILL < d <= RECOVER_WITHIN and abs(phi) > STEER_TOL:
         # a recovery must end within the budget; near the target a robot facing away would rather
         # back off before it turns (a turn where it stands, beside the box, sweeps the box away)
-        fitting = [("recover", seq) for seq in recovery_candidates(phi, sign_away()) if len(seq) - 1 <= recover]
-        stop = Primitive("stop")
-        out += fitting + ([("push", (stop, stop))] if fitting and ("push", (stop, stop)) not in out else [])
+        out += [("recover", seq) for seq in recovery_candidates(phi, sign_away()) if len(seq) - 1 <= recover]
     return out
 
 

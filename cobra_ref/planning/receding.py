@@ -15,7 +15,7 @@ stepper's memory and the plan so far):
    index. When the push has stalled (``reasons.stalled_over``: the box came less than 3 mm nearer
    its target in 3 periods), or the robot faces away from the target (not within the re-planned
    tail of a recovery), within ``choices.RECOVER_WITHIN`` of the target with the box off its line
-   (|phi| above ``facing.STEER_TOL``), recoveries and a stop are compared with those
+   (|phi| above ``facing.STEER_TOL``), recoveries are compared with those
    (``facing.recovery_candidates``: back off, turn, roll back, push gently; one primitive per
    period, each rolled out over its whole length; one starts only if it ends within the budget);
    a chosen recovery's back-off and turns then run without re-planning, and its roll back and push
