@@ -307,3 +307,32 @@ def test_the_box_passes_a_waypoint_anywhere_on_its_way_during_a_period():
     np.testing.assert_array_equal(watched.q, whole.q)
     end = float(np.linalg.norm(watched.q[box:box + 2] - middle))
     assert closest == 0.0 and end > 0.005  # sampled every 50 ms, 0.25 s among them; the end 5 mm or more away
+
+
+def test_benchmark_tasks_are_chosen_by_name_and_their_plans_kept(tmp_path, monkeypatch):
+    # --task picks tasks by name (an unknown one is refused, naming the tasks there are); --plans keeps
+    # each task's plan JSON, which replays; both apply only with --benchmark. The benchmark's options
+    # are shortened by hand: one tiny task in 0.2 s
+    from cobra_ref.planning import benchmark
+
+    tiny = (("ahead", (0.05, 0.0), ()), ("left", (0.0, 0.05), ()))
+    monkeypatch.setattr(benchmark, "GOALS", tiny)
+    assert benchmark.select(["left"]) == tiny[1:] and benchmark.select([]) == tiny
+    with pytest.raises(ValueError, match="'right'.*ahead, left"):
+        benchmark.select(["right"])
+    out, plans = tmp_path / "rows.json", tmp_path / "plans"
+    base = ["push", "--benchmark", "--out", str(out), "--budget", "0.2", "--period", "0.1", "--horizon", "1",
+            "--samples", "1", "--dt", "0.002", "--plant-dt", "0.002", "--workers", "1", "--quiet"]
+    with pytest.raises(SystemExit, match="no benchmark task 'right'"):
+        main(base + ["--task", "right"])
+    assert main(base + ["--task", "left", "--plans", str(plans)]) == 0
+    assert [r["task"] for r in json.loads(out.read_text())["rows"]] == ["left"]
+    assert sorted(p.name for p in plans.iterdir()) == ["left.plan.json"]
+    assert main(["push", "--replay", str(plans / "left.plan.json"), "--out", str(tmp_path / "again.npz")]) == 0
+    box = np.load(tmp_path / "again.npz")["box_pose"][:, :2]  # the replay is the task's run: its box path
+    every = 25  # the rows' box path is sampled every 50 ms: 25 steps of the 2 ms plant
+    row = json.loads(out.read_text())["rows"][0]
+    assert (box[::every] - box[0]).round(5).tolist() == row["box_path"]
+    for option in (["--task", "left"], ["--plans", str(plans)], ["--figure", str(tmp_path / "p.png")]):
+        with pytest.raises(SystemExit, match=f"{option[0]} applies only with --benchmark"):
+            main(["push", "--goal", "0.05,0", "--out", str(tmp_path / "run.npz")] + option)

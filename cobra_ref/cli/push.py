@@ -67,6 +67,11 @@ def add_parsers(sub) -> None:
                    help="push to the benchmark's 16 goals and 2 waypoint paths (cobra_ref/planning/benchmark.py) "
                         "instead of --goal; OUT is then the JSON of the rows (rewritten after each task)")
     p.add_argument("--figure", default=None, help="--benchmark: also draw every box path with its goal (PNG)")
+    p.add_argument("--task", action="append", default=[], metavar="NAME",
+                   help="--benchmark: only this task (repeatable; e.g. 180deg-0.50m, path-left)")
+    p.add_argument("--plans", default=None, metavar="DIR",
+                   help="--benchmark: also write each task's plan JSON to DIR/NAME.plan.json (it replays with "
+                        "--replay and holds every re-plan's candidates and costs)")
     p.add_argument("--travel-map", action="store_true",
                    help="no push: measure where each primitive takes the robot alone, per cycle (every rolling "
                         "shape at five tapers, sidewinding both ways; cobra_ref/planning/locomotion.py); OUT is the "
@@ -81,6 +86,9 @@ def cmd_push(args) -> int:
     executed is written)."""
     from ..planning.receding import push, push_record
 
+    only = [name for name, given in (("--figure", args.figure), ("--task", args.task), ("--plans", args.plans)) if given]
+    if only and not args.benchmark:
+        raise fail(f"{only[0]} applies only with --benchmark")
     if args.replay is not None:
         return _replay(args)
     if args.benchmark:
@@ -161,20 +169,33 @@ def _executor(workers):
 
 def _benchmark(args) -> int:
     """``push --benchmark``: every benchmark task, the rows written to OUT after each one."""
-    from ..planning.benchmark import run_benchmark, summary
+    from ..planning.benchmark import run_benchmark, select, summary
 
     check_out(args.out, "--out")
     if args.figure:
         check_out(args.figure, "--figure")
+    try:
+        tasks = select(args.task)
+    except ValueError as exc:
+        raise fail(f"--task: {exc}") from None
+    if args.plans:
+        try:
+            os.makedirs(args.plans, exist_ok=True)
+        except OSError as exc:
+            raise fail(f"--plans {args.plans}: {exc}") from None
     err = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
 
     def keep(rows):
         write_text_atomic(args.out, json.dumps({"summary": summary(rows), "rows": rows}, indent=1) + "\n", "--out")
 
+    def keep_plan(name, record):
+        path = os.path.join(args.plans, f"{name}.plan.json")
+        write_text_atomic(path, json.dumps(record, indent=1) + "\n", "--plans")
+
     with c_stdout_silenced():
         with _executor(args.workers) as executor:
-            rows = run_benchmark(_options(args), executor, progress=err, keep=keep,
-                                 plant=_plant_factory(args.plant))
+            rows = run_benchmark(_options(args), executor, tasks=tasks, progress=err, keep=keep,
+                                 plant=_plant_factory(args.plant), keep_plan=keep_plan if args.plans else None)
     if args.figure:
         from ..viz.push_paths import plot_pushes
 

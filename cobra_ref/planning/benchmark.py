@@ -36,14 +36,18 @@ GOALS = tuple((f"{d:03d}deg-{r:.2f}m", _direction(d, r), ()) for r in (0.25, 0.5
 )
 
 
-def run_benchmark(base: PushOptions, executor=None, tasks=GOALS, progress=None, keep=None, plant=None) -> list:
+def run_benchmark(base: PushOptions, executor=None, tasks=GOALS, progress=None, keep=None, plant=None,
+                  keep_plan=None) -> list:
     """One row per task (module docstring), in order; ``keep(rows)`` is called after each task (to
-    write what is done), ``progress(line)`` gets the planner's lines and one per task; ``plant``:
-    as ``receding.push``'s."""
+    write what is done), ``keep_plan(name, record)`` with its plan JSON's record (``push_record``:
+    it replays to the task's run, and holds every re-plan's candidates and costs),
+    ``progress(line)`` gets the planner's lines and one per task; ``plant``: as ``receding.push``'s."""
     rows = []
     for name, goal, via in tasks:
         result = push(replace(base, goal=tuple(goal), via=tuple(via)), executor, progress, plant)
         record = push_record(result, replace(base, goal=tuple(goal), via=tuple(via)))
+        if keep_plan is not None:
+            keep_plan(name, record)
         box = result.trajectory.box_pose[:, :2]
         start = box[0]
         passes = [float(np.min(np.linalg.norm(box - (start + np.asarray(w)), axis=1))) for w in via]
@@ -61,6 +65,16 @@ def run_benchmark(base: PushOptions, executor=None, tasks=GOALS, progress=None, 
         if keep is not None:
             keep(rows)
     return rows
+
+
+def select(names) -> tuple:
+    """The tasks of ``GOALS`` named in ``names``, in the benchmark's order (all for none); ValueError
+    naming an unknown one and the names there are."""
+    known = [name for name, _, _ in GOALS]
+    unknown = [n for n in names or () if n not in known]
+    if unknown:
+        raise ValueError(f"no benchmark task {unknown[0]!r} (the tasks: {', '.join(known)})")
+    return tuple(t for t in GOALS if not names or t[0] in names)
 
 
 def summary(rows: list) -> dict:
