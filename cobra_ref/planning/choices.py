@@ -45,8 +45,8 @@ def choose_candidates(phi: float, d: float, moving: Primitive, rng: np.random.Ge
                                                    horizon=horizon, final=d <= FINAL)
                + steering_candidates(phi, moving)]
     if recover is not None and STILL < d <= RECOVER_WITHIN and abs(phi) > STEER_TOL:
-        # a recovery must end within the budget; near the target a robot facing away would rather
-        # back off before it turns (a turn where it stands, beside the box, sweeps the box away)
+        # a recovery must end within the budget; its rollout is weighed against the turns' and pushes':
+        # beside the box a turn where the robot stands can sweep the box, and a back-off can drag it
         out += [("recover", seq) for seq in recovery_candidates(phi, sign_away()) if len(seq) - 1 <= recover]
     return out
 
