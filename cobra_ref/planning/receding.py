@@ -259,7 +259,7 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
             if mode == "turn" and abs(phi) <= FACE_TOL:
                 queue = []  # a turn pair's first half already faced the robot towards the target
             if queue:  # the rest of a chosen recovery's back-off and turns, or of a turn pair: no re-plan
-                modes, pairs, results, best = [mode], [], [{"cost": None}], 0
+                modes, pairs, results, best = (), (), [{"cost": None}], 0
                 last = queue.pop(0)
             else:
                 # the periods left for a recovery (not within a recovery's re-planned tail): after a stall, or facing away
