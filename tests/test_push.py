@@ -266,6 +266,26 @@ def test_a_push_that_spends_its_budget_says_why():
     assert gave_up(pushing, [0.25, 0.2, 0.15, 0.1]) == "budget spent: still pushing, 10.00 cm from its target"
 
 
+def test_a_stall_is_offered_the_recoveries_once_then_not_for_three_re_plans():
+    # the box stays 5 cm from its target, off the robot's push line (phi 0.3 rad): stalled from the
+    # fourth period on (it came less than 3 mm nearer in three periods). Each offer rolls a dozen
+    # recoveries out; after one, the next three re-plans push or turn only, whatever they choose
+    from cobra_ref.planning.reasons import STALL_PERIODS, calm_after, recovery_periods
+
+    ds, calm, offered = [], 0, []
+    for k in range(12):
+        ds.append(0.05)
+        left = recovery_periods(calm, ds, 0.3, 30 - k)
+        offered.append(left)
+        calm = calm_after(calm, "push", ("push", "recover") if left is not None else ("push",))
+    assert offered == [None] * 3 + [27, None, None, None, 23, None, None, None, 19]
+    assert STALL_PERIODS == 3
+    # a robot facing away (|phi| > 25 deg) may recover without a stall, by the same count
+    assert recovery_periods(3, [0.3], 0.6, 30) == 30 and recovery_periods(2, [0.3], 0.6, 30) is None
+    # a recovery's back-off and turns run from the queue (no candidates): the count starts after them
+    assert calm_after(5, "recover", ()) == 0 and calm_after(0, "push", ()) == 1
+
+
 def test_a_push_ends_when_the_robot_has_rested_for_three_periods():
     # three re-plans in a row chose to stop: nothing the planner has brings the box nearer
     from cobra_ref.planning.primitives import PlanReference

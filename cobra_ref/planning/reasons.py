@@ -2,13 +2,14 @@
 goal out of reach or makes it hard (``outlook``); when the budget is spent, why it gave up
 (``gave_up``); and the stall test both the loop and ``gave_up`` read (``stalled_over``): a push has
 stalled when the box came less than ``STALL_MOVE`` nearer its target in ``STALL_PERIODS`` periods.
+When a re-plan may offer the recoveries (``recovery_periods``, ``calm_after``) follows from it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .facing import facing
+from .facing import FACE_TOL, facing
 
 STALL_PERIODS, STALL_MOVE = 3, 0.003  # a push has stalled when the box came less than 3 mm nearer in 3 periods
 PUSH_SPEED = 0.3  # [m/s] about the fastest push measured: no rollout of the single-shooting searches moved the box more than 0.43 m in 1.5 s
@@ -51,3 +52,21 @@ def stalled_over(ds: list) -> bool:
     """Whether the box came less than ``STALL_MOVE`` nearer its target over the last
     ``STALL_PERIODS`` periods, from its distances ``ds`` [m] at each period's start (the last: now)."""
     return len(ds) > STALL_PERIODS and ds[-1 - STALL_PERIODS] - ds[-1] < STALL_MOVE
+
+
+def recovery_periods(calm: int, ds: list, phi: float, left: int) -> int | None:
+    """The periods a recovery may take (``left``: those left in the budget) when this re-plan may
+    offer the recoveries, else None: the push has stalled (``stalled_over(ds)``) or the robot faces
+    away from its target (|``phi``| > ``facing.FACE_TOL``), and ``calm`` >= ``STALL_PERIODS`` re-plans
+    have passed since the last one that offered them or since a recovery ran. So a stall is offered
+    the recoveries at most once in ``STALL_PERIODS`` + 1 re-plans, not at every one (each offer rolls
+    out a dozen sequences of five to seven periods)."""
+    if calm >= STALL_PERIODS and (stalled_over(ds) or abs(phi) > FACE_TOL):
+        return left
+    return None
+
+
+def calm_after(calm: int, mode: str, modes: tuple) -> int:
+    """``calm`` after a period whose re-plan rolled out candidates of ``modes`` (none: the period ran
+    from a queue) and ran one of ``mode``: 0 if recoveries were offered or one is running, else one more."""
+    return 0 if mode == "recover" or "recover" in modes else calm + 1

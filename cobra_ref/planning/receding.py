@@ -13,8 +13,8 @@ stepper's memory and the plan so far):
    sampled around the rolling primitive the last plan goes on with (``choices.warm_start``: the
    plan shifted by a period), with the noise from a generator seeded by ``seed`` and the period's
    index. When the push has stalled (``reasons.stalled_over``: the box came less than 3 mm nearer
-   its target in 3 periods), or the robot faces away from the target (not within the re-planned
-   tail of a recovery), within ``choices.RECOVER_WITHIN`` of the target with the box off its line
+   its target in 3 periods), or the robot faces away from the target (``reasons.recovery_periods``:
+   not within 3 periods of a re-plan that offered them or of a recovery), within ``choices.RECOVER_WITHIN`` of the target with the box off its line
    (|phi| above ``facing.STEER_TOL``), recoveries are compared with those
    (``facing.recovery_candidates``: back off, turn, roll back, push gently; one primitive per
    period, each rolled out over its whole length; one starts only if it ends within the budget);
@@ -73,7 +73,7 @@ from .choices import choose_candidates, warm_start
 from .facing import FACE_TOL, RECOVERY_TAIL, TURN_PAIR, W_APPROACH, W_LATERAL, away, facing, miss
 from .locomotion import link_centres
 from .primitives import SIDEWINDING, PlanReference, Primitive
-from .reasons import STALL_PERIODS, gave_up, outlook, stalled_over
+from .reasons import STALL_PERIODS, calm_after, gave_up, outlook, recovery_periods
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
 ROLLOUT_BATCHES = 2  # a re-plan's candidates go to the executor as this many batches (``replan_batched``)
@@ -242,7 +242,7 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     n_budget = int(round(o.budget / o.period))
     run = _plant(o, plant)(model, settings, q0, qd0, n_period * n_budget)
     cycles, last, moving, aim, mode = [], o.start, o.start, 0, "push"
-    boxes, ds, queue, calm = [], [], [], 0  # the box, its distance at each period's start; periods run without re-planning; periods since a recovery
+    boxes, ds, queue, calm = [], [], [], 0  # the box, its distance at each period's start; periods run without re-planning; re-plans since recoveries
     start, reason, reached = time.perf_counter(), None, False
     notes = outlook(model, q0, targets, o.budget)
     for note in notes if progress is not None else ():
@@ -262,14 +262,13 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
                 modes, pairs, results, best = (), (), [{"cost": None}], 0
                 last = queue.pop(0)
             else:
-                # the periods left for a recovery (not within a recovery's re-planned tail): after a stall, or facing away
-                recover = n_budget - k if calm >= STALL_PERIODS and (stalled_over(ds) or abs(phi) > FACE_TOL) else None
+                recover = recovery_periods(calm, ds, phi, n_budget - k)  # the periods a recovery may take, or None
                 modes, pairs = zip(*choose_candidates(phi, d0, moving, np.random.default_rng([o.seed, k]), o.samples,
                                                       recover, lambda: away(model, run.q), o.horizon))
                 best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, "turn" in modes), executor)
                 mode, last = modes[best], pairs[best][0]
                 queue = committed(mode, pairs[best])
-            calm = 0 if mode == "recover" else calm + 1
+            calm = calm_after(calm, mode, modes)
             moving = warm_start(pairs[best], moving) if pairs and mode != "recover" else moving
             plan.extend(last, t)
             closest = advance_watching(run, plan, n_period, box, targets[aim])
