@@ -169,6 +169,32 @@ def test_the_benchmark_on_a_dask_cluster_gives_exactly_the_serial_rows():
         assert on_dask[0][key] == serial[0][key], key
 
 
+def test_a_rollout_that_ends_with_the_box_at_the_goal_is_not_charged_for_the_next_push():
+    # the approach distance and the lateral weight on the miss prepare a next push: a rollout whose
+    # box ends within the tolerance of its target needs none, and costs its distance and its effort,
+    # impact and torque terms only, whatever those weights; 5 cm short of the target they count
+    from dataclasses import replace as replaced
+
+    from cobra_ref.planning.primitives import PlanReference
+    from cobra_ref.planning.receding import Rollout
+    from cobra_ref.robots import cobra_model
+    from cobra_ref.start import initial_state
+
+    plan = PlanReference(TINY.start)
+    q0, qd0 = initial_state(cobra_model(TINY.cobra), plan, TINY.settings)
+    pair = (TINY.start, Primitive("stop"))
+    end = candidate_cost(Rollout(plan.to_dict(), pair, 0.0, q0, qd0, None, (0.3, 0.0), TINY))["box"]
+
+    def cost(target, **weights):
+        options = replaced(TINY, **weights)
+        return candidate_cost(Rollout(plan.to_dict(), pair, 0.0, q0, qd0, None, tuple(target), options))["cost"]
+
+    at_goal = np.asarray(end)  # the rollout is deterministic: its box ends exactly here
+    assert cost(at_goal, w_approach=0.0, w_lateral=1.0) == cost(at_goal, w_approach=5.0, w_lateral=5.0)
+    short = at_goal + (0.05, 0.0)
+    assert cost(short, w_approach=0.0, w_lateral=1.0) < cost(short, w_approach=5.0, w_lateral=5.0)
+
+
 def test_the_pushing_point_lies_behind_the_box_on_the_line_from_the_target():
     # put the box so that the pushing point for a target 0.25 m ahead of it (+x) is exactly the head's
     # centre of mass: half a box and a link radius behind the box centre; the distance is then zero

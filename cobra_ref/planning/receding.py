@@ -36,7 +36,8 @@ stepper's memory and the plan so far):
    centre, a box half-size plus a link radius out (where a pusher must be to push the box towards
    the target, as in pusher-slider planning; weight ``w_approach``, and ``facing.W_APPROACH`` for a
    turn, which must end with the box in reach); E, I, P_tau the shooting cost's effort, impact and torque-limit
-   terms (:mod:`cobra_ref.planning.cost`) over the horizon;
+   terms (:mod:`cobra_ref.planning.cost`) over the horizon. A rollout whose box ends within ``tolerance``
+   of the target needs no next push: its m is d and its a 0;
 3. the best candidate's first primitive is appended to the plan and the plant runs one period.
 
 The plant runs at another time step than the rollouts: by default the figures' 1 ms
@@ -190,9 +191,10 @@ def _rollout_cost(job: Rollout, traj, model, n_period: int) -> dict:
     impact = impact_term(traj, robot_weight(model), duration)
     p_tau = excess_term(traj, "tau_excess", o.cobra.tau_max, duration)
     w_a = W_APPROACH if job.turning else o.w_approach
-    approach = pushing_distance(model, traj.q[-1], target, o.cobra) if w_a else 0.0
+    ready = d_end > o.tolerance  # the terms that prepare a next push count only while one is needed
+    approach = pushing_distance(model, traj.q[-1], target, o.cobra) if w_a and ready else 0.0
     # the distance with its lateral part weighted, times the facing factor: m (1 + w_face (1 - cos phi))
-    faced = miss(model, traj.q[-1], target, o.w_lateral)
+    faced = miss(model, traj.q[-1], target, o.w_lateral) if ready else d_end
     if o.w_face:
         faced *= 1 + o.w_face * (1 - np.cos(facing(model, traj.q[-1], target)))
     cost = (faced + 0.5 * d_mid + w_a * approach + o.w_effort * effort + o.w_impact * impact
