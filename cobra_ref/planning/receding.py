@@ -12,10 +12,10 @@ stepper's memory and the plan so far):
    (:mod:`cobra_ref.planning.primitives`), one per period, the last for the rest of the horizon,
    sampled around the rolling primitive the last plan goes on with (``choices.warm_start``: the
    plan shifted by a period), with the noise from a generator seeded by ``seed`` and the period's
-   index. When the push has stalled (``reasons.stalled_over``: the box came less than 3 mm nearer
-   its target in 3 periods), or the robot faces away from the target (``reasons.recovery_periods``:
-   not within 3 periods of a re-plan that offered them or of a recovery), within ``choices.RECOVER_WITHIN`` of the target with the box off its line
-   (|phi| above ``facing.STEER_TOL``), recoveries are compared with those
+   index. When the push has stalled (``reasons.stalled_over``: the box came less than 3 mm nearer its
+   target in 3 periods), or the robot faces away from the target (``reasons.recovery_periods``: not
+   within 3 periods of a re-plan that offered them or of a recovery), within ``choices.RECOVER_WITHIN``
+   of the target with the box off its line (|phi| above ``facing.STEER_TOL``), recoveries are compared with those
    (``facing.recovery_candidates``: back off, turn, roll back, push gently; one primitive per
    period, each rolled out over its whole length; one starts only if it ends within the budget);
    a chosen recovery's back-off and turns then run without re-planning, and its roll back and push
