@@ -23,6 +23,18 @@ def pushed():
     return push(TINY, SerialExecutor())
 
 
+def from_start(pair: tuple, target=(0.3, 0.0), options: PushOptions = TINY):
+    """The ``Rollout`` of ``pair`` from ``TINY``'s start (t = 0, no stepper memory) towards ``target``."""
+    from cobra_ref.planning.primitives import PlanReference
+    from cobra_ref.planning.receding import Rollout
+    from cobra_ref.robots import cobra_model
+    from cobra_ref.start import initial_state
+
+    plan = PlanReference(TINY.start)
+    q0, qd0 = initial_state(cobra_model(TINY.cobra), plan, TINY.settings)
+    return Rollout(plan.to_dict(), pair, 0.0, q0, qd0, None, tuple(target), options)
+
+
 def test_the_candidates_of_a_replan():
     # the last choice continued, then stopped, rolled back (then on), a stop near the goal, the four
     # other rolling shapes, near the goal a gentle push of each shape each way then a stop, the samples
@@ -68,23 +80,17 @@ def test_each_period_applies_the_cheapest_candidate(pushed):
 
 def test_a_replans_candidates_cost_the_same_in_a_batch_as_one_by_one():
     # candidate_costs advances the candidates together (cobra_ref.batch); each is its own rollout
-    from cobra_ref.planning.primitives import PlanReference
-    from cobra_ref.planning.receding import Rollout, candidate_costs
-    from cobra_ref.robots import cobra_model
-    from cobra_ref.start import initial_state
+    from cobra_ref.planning.receding import candidate_costs
 
-    plan = PlanReference(TINY.start)
-    q0, qd0 = initial_state(cobra_model(TINY.cobra), plan, TINY.settings)
     pairs = [candidates(TINY.start, np.random.default_rng(0), 1)[i] for i in (0, 2, 4, 5)]  # C, back, stop, S
-    jobs = [Rollout(plan.to_dict(), pair, 0.0, q0, qd0, None, (0.3, 0.0), TINY) for pair in pairs]
+    jobs = [from_start(pair) for pair in pairs]
     batched = candidate_costs(jobs)
     assert [r["cost"] for r in batched] == [candidate_cost(job)["cost"] for job in jobs]
     assert len({r["cost"] for r in batched}) == 4  # four different first periods, four different rollouts
     # a re-plan's batches do not mix rollout lengths: a longer sequence (a recovery's) among the
     # pairs leaves every cost as its own rollout's, and the cheapest is chosen
     from cobra_ref.planning.receding import replan_batched
-    longer = Rollout(plan.to_dict(), (Primitive("C", 0.4, -0.5), Primitive("stop"), Primitive("stop")), 0.0, q0, qd0,
-                     None, (0.3, 0.0), TINY)
+    longer = from_start((Primitive("C", 0.4, -0.5), Primitive("stop"), Primitive("stop")))
     best, results = replan_batched(jobs[:2] + [longer] + jobs[2:])
     alone = [candidate_cost(job)["cost"] for job in jobs[:2] + [longer] + jobs[2:]]
     assert [r["cost"] for r in results] == alone and best == int(np.argmin(alone))
@@ -175,19 +181,11 @@ def test_a_rollout_that_ends_with_the_box_at_the_goal_is_not_charged_for_the_nex
     # impact and torque terms only, whatever those weights; 5 cm short of the target they count
     from dataclasses import replace as replaced
 
-    from cobra_ref.planning.primitives import PlanReference
-    from cobra_ref.planning.receding import Rollout
-    from cobra_ref.robots import cobra_model
-    from cobra_ref.start import initial_state
-
-    plan = PlanReference(TINY.start)
-    q0, qd0 = initial_state(cobra_model(TINY.cobra), plan, TINY.settings)
     pair = (TINY.start, Primitive("stop"))
-    end = candidate_cost(Rollout(plan.to_dict(), pair, 0.0, q0, qd0, None, (0.3, 0.0), TINY))["box"]
+    end = candidate_cost(from_start(pair))["box"]
 
     def cost(target, **weights):
-        options = replaced(TINY, **weights)
-        return candidate_cost(Rollout(plan.to_dict(), pair, 0.0, q0, qd0, None, tuple(target), options))["cost"]
+        return candidate_cost(from_start(pair, target, replaced(TINY, **weights)))["cost"]
 
     at_goal = np.asarray(end)  # the rollout is deterministic: its box ends exactly here
     assert cost(at_goal, w_approach=0.0, w_lateral=1.0) == cost(at_goal, w_approach=5.0, w_lateral=5.0)
