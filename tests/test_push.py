@@ -380,3 +380,31 @@ def test_benchmark_tasks_are_chosen_by_name_and_their_plans_kept(tmp_path, monke
     for option in (["--task", "left"], ["--plans", str(plans)], ["--figure", str(tmp_path / "p.png")]):
         with pytest.raises(SystemExit, match=f"{option[0]} applies only with --benchmark"):
             main(["push", "--goal", "0.05,0", "--out", str(tmp_path / "run.npz")] + option)
+
+
+@pytest.mark.parametrize("nudge", [0.0, 0.05])
+def test_a_committed_turn_is_re_planned_when_the_box_is_not_where_its_rollout_put_it(nudge):
+    # the goal beside the box: the first re-plan turns, a pair of periods the plant runs whole while
+    # the box stays within 2 cm of where the chosen rollout put it. A plant that moves the box 5 cm
+    # after the first period (as a sweep the rollouts mispredict does) has the second period re-planned
+    from dataclasses import replace
+
+    from cobra_ref.planning.reasons import DEPARTED
+    from cobra_ref.simulate import Run
+
+    options = replace(TINY, goal=(0.0, -0.05))
+
+    class Nudged(Run):
+        def advance(self, reference, n_steps, progress=None):
+            super().advance(reference, n_steps, progress)
+            if abs(self.t - options.period) < 1e-9:  # the first period's end
+                box = self.model.q_idx[self.model.boxes[0].body].start
+                self.q[box] += nudge
+
+    result = push(options, SerialExecutor(), plant=lambda *a: Nudged(*a[:4], "fast", a[4]))
+    first, second = result.cycles
+    assert first["mode"] == "turn" and first["rollouts"] > 0
+    # the rollout (2 ms) put the box within 2 cm of where the plant (1 ms) took it; the nudge comes after
+    n = int(round(options.period / options.plant_dt))
+    assert np.linalg.norm(np.asarray(first["predicted_box"]) - result.trajectory.box_pose[n, :2]) < DEPARTED
+    assert (second["rollouts"] > 0) == (nudge > DEPARTED)  # re-planned, or the committed half ran

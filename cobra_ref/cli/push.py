@@ -84,7 +84,8 @@ def cmd_push(args) -> int:
     """Run the push, write the run and the plan, print one JSON line. Exit 0 when the box reached
     the goal, 1 when the budget ran out first, 130 after Ctrl-C and 143 after SIGTERM (what was
     executed is written)."""
-    from ..planning.receding import push, push_record
+    from ..planning.plan_file import push_record
+    from ..planning.receding import push
 
     only = [name for name, given in (("--figure", args.figure), ("--task", args.task), ("--plans", args.plans)) if given]
     if only and not args.benchmark:
@@ -128,7 +129,8 @@ def cmd_push(args) -> int:
 
 def _replay(args) -> int:
     """``push --replay PLAN --out OUT``: the executed run of a plan, written to OUT."""
-    from ..planning.receding import load_push, replay
+    from ..planning.plan_file import load_push
+    from ..planning.receding import replay
 
     check_out(args.out, "--out")
     try:

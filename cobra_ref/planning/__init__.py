@@ -9,8 +9,8 @@ The closed loop (``cobra-ref push``) is read after it: ``primitives`` (the per-p
 primitives and the joint reference they chain into), ``locomotion`` (where each primitive takes the
 robot alone), ``facing`` (which way the robot can push the box, and the turns that face it towards
 the target), ``choices`` (the candidates of one re-plan), ``receding`` (the receding-horizon planner),
-``reasons`` (what a push says of its task, up front and when it gives up), ``benchmark`` (its goals
-around the box).
+``reasons`` (what a push says of its task, up front and when it gives up), ``plan_file`` (its plan
+JSON, written and read back), ``benchmark`` (its goals around the box).
 """
 
 from ..infra.executors import SerialExecutor

@@ -17,7 +17,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from .receding import PushOptions, push, push_record
+from .plan_file import push_record
+from .receding import PushOptions, push
 
 REACHED = 0.02  # [m] a goal counts as reached within this
 PASSED = 0.03  # [m] a waypoint counts as passed within this

@@ -2,7 +2,8 @@
 goal out of reach or makes it hard (``outlook``); when the budget is spent, why it gave up
 (``gave_up``); and the stall test both the loop and ``gave_up`` read (``stalled_over``): a push has
 stalled when the box came less than ``STALL_MOVE`` nearer its target in ``STALL_PERIODS`` periods.
-When a re-plan may offer the recoveries (``recovery_periods``, ``calm_after``) follows from it.
+When a re-plan may offer the recoveries (``recovery_periods``, ``calm_after``) follows from it, and
+when the plant has left a committed sequence's prediction (``departed``).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import numpy as np
 from .facing import FACE_TOL, facing
 
 STALL_PERIODS, STALL_MOVE = 3, 0.003  # a push has stalled when the box came less than 3 mm nearer in 3 periods
+DEPARTED = 0.02  # [m] a committed period runs only while the box lies within this of its predicted place
 PUSH_SPEED = 0.3  # [m/s] about the fastest push measured: no rollout of the single-shooting searches moved the box more than 0.43 m in 1.5 s
 
 
@@ -70,3 +72,11 @@ def calm_after(calm: int, mode: str, modes: tuple) -> int:
     """``calm`` after a period whose re-plan rolled out candidates of ``modes`` (none: the period ran
     from a queue) and ran one of ``mode``: 0 if recoveries were offered or one is running, else one more."""
     return 0 if mode == "recover" or "recover" in modes else calm + 1
+
+
+def departed(box, expected) -> bool:
+    """Whether the plant's box (x, y) after a period lies more than ``DEPARTED`` from ``expected``, where
+    the rollout that chose the period put it (None: no prediction). The plant runs the rest of a
+    committed sequence (a turn pair's second half, a recovery's turns) only while it has not: a turn
+    that sweeps the box moves it by an amount the rollouts, in a coarser world, do not predict."""
+    return expected is not None and float(np.linalg.norm(np.asarray(box) - np.asarray(expected))) > DEPARTED

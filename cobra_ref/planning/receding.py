@@ -19,7 +19,9 @@ stepper's memory and the plan so far):
    (``facing.recovery_candidates``: back off, turn, roll back, push gently; one primitive per
    period, each rolled out over its whole length; one starts only if it ends within the budget);
    a chosen recovery's back-off and turns then run without re-planning, and its roll back and push
-   are re-planned as they come;
+   are re-planned as they come. A committed period (a turn's second half, a recovery's back-off
+   and turns) runs only while the box lies within ``reasons.DEPARTED`` of where the chosen rollout
+   put it (``reasons.departed``); else the next period is re-planned from the state reached;
 2. each candidate is rolled out over the horizon from that state (through the executor, the
    candidates in batches advanced together: ``replan_batched``), and costs, in metres
    (``candidate_cost``)::
@@ -55,7 +57,7 @@ steps, bit for bit.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -63,7 +65,6 @@ from ..infra import arguments
 from ..infra.executors import SerialExecutor
 from ..infra.validation import DEFAULT_DT, RULES
 from ..params import CobraParameters
-from ..provenance import code_version
 from ..robots import cobra_model
 from ..batch import BatchRun
 from ..simulate import Run
@@ -74,7 +75,7 @@ from .choices import choose_candidates, warm_start
 from .facing import FACE_TOL, RECOVERY_TAIL, TURN_PAIR, W_APPROACH, W_LATERAL, away, facing, miss
 from .locomotion import link_centres
 from .primitives import SIDEWINDING, PlanReference, Primitive
-from .reasons import STALL_PERIODS, calm_after, gave_up, outlook, recovery_periods
+from .reasons import STALL_PERIODS, calm_after, departed, gave_up, outlook, recovery_periods
 
 FAILED = 1e3  # [m] the cost of a rollout whose simulation failed
 ROLLOUT_BATCHES = 2  # a re-plan's candidates go to the executor as this many batches (``replan_batched``)
@@ -154,7 +155,8 @@ class Rollout:
 
 
 def candidate_cost(job: Rollout) -> dict:
-    """One candidate's rollout and its cost J (module docstring): {"cost", "distance", "box"}.
+    """One candidate's rollout and its cost J (module docstring): {"cost", "distance", "box", "boxes"
+    (the box at each period's end)}.
     What the executor runs (module level: picklable)."""
     return candidate_costs([job])[0]
 
@@ -182,7 +184,7 @@ def _rollout_cost(job: Rollout, traj, model, n_period: int) -> dict:
     """The cost J of one candidate's rollout ``traj`` (module docstring), or ``FAILED`` if it failed."""
     o = job.options
     if traj.error:
-        return {"cost": FAILED, "distance": None, "box": None, "error": traj.error}
+        return {"cost": FAILED, "distance": None, "box": None, "boxes": None, "error": traj.error}
     target = np.asarray(job.target)
     d_mid = float(np.linalg.norm(traj.box_pose[n_period, :2] - target))
     d_end = float(np.linalg.norm(traj.box_pose[-1, :2] - target))
@@ -199,7 +201,8 @@ def _rollout_cost(job: Rollout, traj, model, n_period: int) -> dict:
         faced *= 1 + o.w_face * (1 - np.cos(facing(model, traj.q[-1], target)))
     cost = (faced + 0.5 * d_mid + w_a * approach + o.w_effort * effort + o.w_impact * impact
             + o.w_tau * p_tau)
-    return {"cost": cost, "distance": d_end, "box": traj.box_pose[-1, :2].tolist(), "error": None}
+    boxes = traj.box_pose[n_period::n_period, :2].tolist()  # the box at each period's end
+    return {"cost": cost, "distance": d_end, "box": traj.box_pose[-1, :2].tolist(), "boxes": boxes, "error": None}
 
 
 def pushing_distance(model, q, target, cobra: CobraParameters) -> float:
@@ -244,7 +247,9 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
     n_budget = int(round(o.budget / o.period))
     run = _plant(o, plant)(model, settings, q0, qd0, n_period * n_budget)
     cycles, last, moving, aim, mode = [], o.start, o.start, 0, "push"
-    boxes, ds, queue, calm = [], [], [], 0  # the box, its distance at each period's start; periods run without re-planning; re-plans since recoveries
+    # the box, its distance at each period's start; periods run without re-planning; re-plans since
+    # recoveries; where the chosen rollout put the box at the end of each of its periods still to run
+    boxes, ds, queue, calm, predicted = [], [], [], 0, []
     start, reason, reached = time.perf_counter(), None, False
     notes = outlook(model, q0, targets, o.budget)
     for note in notes if progress is not None else ():
@@ -269,16 +274,18 @@ def push(options: PushOptions, executor=None, progress=None, plant=None) -> Push
                                                       recover, lambda: away(model, run.q), o.horizon))
                 best, results = replan_batched(_jobs(plan, run, pairs, targets[aim], o, "turn" in modes), executor)
                 mode, last = modes[best], pairs[best][0]
-                queue = committed(mode, pairs[best])
+                queue, predicted = committed(mode, pairs[best]), list(results[best]["boxes"] or ())
             calm = calm_after(calm, mode, modes)
             moving = warm_start(pairs[best], moving) if pairs and mode != "recover" else moving
             plan.extend(last, t)
             closest = advance_watching(run, plan, n_period, box, targets[aim])
-            d = distance()
+            d, expected = distance(), predicted.pop(0) if predicted else None
+            # a box that is not where the committed periods' rollout put it: re-plan from here
+            queue = [] if departed(run.q[box:box + 2], expected) else queue
             cycles.append({"t": t, "facing": float(np.degrees(phi)), "mode": mode,
                            "chosen": last.to_dict(), "predicted_cost": results[best]["cost"],
                            "distance": d, "target": list(targets[aim]), "rollouts": len(pairs),
-                           "wall_time": time.perf_counter() - start,
+                           "predicted_box": expected, "wall_time": time.perf_counter() - start,
                            "candidates": [{"mode": m, "pair": [_name(p) for p in pair], "cost": r["cost"],
                                            "distance": r["distance"]} for m, pair, r in zip(modes, pairs, results)]})
             if progress is not None:
@@ -381,46 +388,6 @@ def _name(p: Primitive) -> str:
     if p.family == "stop":
         return "stop"
     return f"{p.family} A {p.amplitude:.2f} f {p.frequency:.2f} b {p.taper:+.2f}"
-
-
-FORMAT = "cobra-ref push v1"
-
-
-def push_record(result: PushResult, options: PushOptions) -> dict:
-    """The plan JSON: the options, the plan, one record per period and the outcome (``load_push`` reads it)."""
-    traj, o = result.trajectory, options
-    final = float(np.linalg.norm(traj.box_pose[-1, :2] - np.asarray(result.goal_world)))
-    return {"format": FORMAT, "code": code_version(planning=True),
-            "options": {"goal": list(o.goal), "via": [list(v) for v in o.via], "period": o.period,
-                        "horizon": o.horizon, "budget": o.budget, "tolerance": o.tolerance,
-                        "via_tolerance": o.via_tolerance, "samples": o.samples, "seed": o.seed,
-                        "start": o.start.to_dict(), "settings": asdict(o.settings), "plant_dt": o.plant_dt, "plant": o.plant,
-                        "cobra": asdict(o.cobra),
-                        "weights": {"effort": o.w_effort, "impact": o.w_impact, "tau": o.w_tau,
-                                    "approach": o.w_approach, "face": o.w_face, "lateral": o.w_lateral}},
-            "plan": result.plan.to_dict(), "cycles": result.cycles, "goal_world": list(result.goal_world),
-            "reached": result.reached, "reason": result.reason, "outlook": result.outlook, "final_distance": final,
-            "simulated_time": traj.duration,
-            "impact_impulse_per_second": float(np.sum(traj.steps["impact_impulse"])) / max(traj.duration, 1e-12),
-            "rollouts": int(sum(c["rollouts"] for c in result.cycles)), "wall_time": round(result.wall_time, 1)}
-
-
-def load_push(record: dict) -> tuple[dict, PushOptions]:
-    """(plan, options) of a plan JSON's record (``push_record``), for ``replay``; ValueError if malformed."""
-    if not isinstance(record, dict) or record.get("format") != FORMAT:
-        raise ValueError(f"not a push plan (expected format {FORMAT!r})")
-    o = record["options"]
-    cobra = CobraParameters(**{k: tuple(v) if isinstance(v, list) else v for k, v in o["cobra"].items()})
-    options = PushOptions(goal=tuple(o["goal"]), via=tuple(tuple(v) for v in o["via"]), period=o["period"],
-                          horizon=o["horizon"], budget=o["budget"], tolerance=o["tolerance"],
-                          via_tolerance=o["via_tolerance"], samples=o["samples"], seed=o["seed"],
-                          start=Primitive(**o["start"]), settings=StepSettings(**o["settings"]), cobra=cobra,
-                          w_effort=o["weights"]["effort"], w_impact=o["weights"]["impact"], w_tau=o["weights"]["tau"],
-                          w_approach=o["weights"]["approach"], w_face=o["weights"].get("face", 0.0),
-                          w_lateral=o["weights"].get("lateral", 1.0),
-                          plant_dt=o.get("plant_dt"),
-                          plant=o.get("plant", "cobra_ref"))
-    return record["plan"], options
 
 
 def _plant(options: PushOptions, factory):
