@@ -25,7 +25,8 @@ where it stands with sidewinding: sidewinding turns clockwise whether it winds f
 its mirror counter-clockwise, so forwards then backwards turns it with little travel (measured in
 docs/planning.md), and the plant runs such a pair whole (``TURN_PAIR``; re-planned every period, a
 re-plan can choose "backwards, then forwards" again and again, and the robot winds away) unless its
-first period already faced the robot towards the target. Such a turn turns n with a; only the
+first period already faced the robot towards the target, or left the box more than
+``reasons.DEPARTED`` from where the turn's rollout put it (a sweep). Such a turn turns n with a; only the
 turn's drift, or the box swept by the body, can bring the box to the robot's other side.
 
 Between ``STEER_TOL`` and ``FACE_TOL`` a pushing re-plan also offers one period of the smaller turn
