@@ -182,7 +182,7 @@ def test_a_rollout_that_ends_with_the_box_at_the_goal_is_not_charged_for_the_nex
     from dataclasses import replace as replaced
 
     pair = (TINY.start, Primitive("stop"))
-    end = candidate_cost(from_start(pair))["box"]
+    end = candidate_cost(from_start(pair))["boxes"][-1]
 
     def cost(target, **weights):
         return candidate_cost(from_start(pair, target, replaced(TINY, **weights)))["cost"]

@@ -155,8 +155,8 @@ class Rollout:
 
 
 def candidate_cost(job: Rollout) -> dict:
-    """One candidate's rollout and its cost J (module docstring): {"cost", "distance", "box", "boxes"
-    (the box at each period's end)}.
+    """One candidate's rollout and its cost J (module docstring): {"cost", "distance", "boxes"
+    (the box at each period's end, the last at the rollout's)}.
     What the executor runs (module level: picklable)."""
     return candidate_costs([job])[0]
 
@@ -184,7 +184,7 @@ def _rollout_cost(job: Rollout, traj, model, n_period: int) -> dict:
     """The cost J of one candidate's rollout ``traj`` (module docstring), or ``FAILED`` if it failed."""
     o = job.options
     if traj.error:
-        return {"cost": FAILED, "distance": None, "box": None, "boxes": None, "error": traj.error}
+        return {"cost": FAILED, "distance": None, "boxes": None, "error": traj.error}
     target = np.asarray(job.target)
     d_mid = float(np.linalg.norm(traj.box_pose[n_period, :2] - target))
     d_end = float(np.linalg.norm(traj.box_pose[-1, :2] - target))
@@ -201,8 +201,8 @@ def _rollout_cost(job: Rollout, traj, model, n_period: int) -> dict:
         faced *= 1 + o.w_face * (1 - np.cos(facing(model, traj.q[-1], target)))
     cost = (faced + 0.5 * d_mid + w_a * approach + o.w_effort * effort + o.w_impact * impact
             + o.w_tau * p_tau)
-    boxes = traj.box_pose[n_period::n_period, :2].tolist()  # the box at each period's end
-    return {"cost": cost, "distance": d_end, "box": traj.box_pose[-1, :2].tolist(), "boxes": boxes, "error": None}
+    boxes = traj.box_pose[n_period::n_period, :2].tolist()  # the box at each period's end, the rollout's last
+    return {"cost": cost, "distance": d_end, "boxes": boxes, "error": None}
 
 
 def pushing_distance(model, q, target, cobra: CobraParameters) -> float:
