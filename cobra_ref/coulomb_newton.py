@@ -127,14 +127,25 @@ def coulomb_newton(problem, x: np.ndarray, rounds: int = 4, steps: int = 4):
     ``rounds`` rounds. None if the linear system is singular, the result not finite, or the set
     still changes.
     """
+    act, theta0 = newton_start(problem, x)
+    return newton_rounds(problem, x, theta0, act, rounds, steps)
+
+
+def newton_start(problem, x: np.ndarray):
+    """(act, theta0): where ``coulomb_newton`` starts from impulses x, their active set
+    (``active_set``) and each contact's friction angle (against the slip where it has no friction yet)."""
     m = problem.m
     H = hessian(problem, np.maximum(x[0:3 * m:3], 0.0))
     r = H @ x + problem.c
-    act = active_set(problem, x, r, H)
-    # the sliding contacts' angles start at their friction's direction (against the slip if it has none yet)
     p_T, r_T = x[:3 * m].reshape(m, 3)[:, 1:], r[:3 * m].reshape(m, 3)[:, 1:]
     start = np.where((np.hypot(*p_T.T) > 0)[:, None], p_T, -r_T)
-    theta0 = np.arctan2(start[:, 1], start[:, 0])
+    return active_set(problem, x, r, H), np.arctan2(start[:, 1], start[:, 0])
+
+
+def newton_rounds(problem, x: np.ndarray, theta0: np.ndarray, act: ActiveSet, rounds: int, steps: int):
+    """``coulomb_newton``'s rounds from x, the angles theta0 and the active set ``act``: the answer
+    (pbar_N, theta, X) of the first round whose set needs no correction, or None."""
+    m = problem.m
     for _ in range(rounds):
         system = _NewtonSystem(problem, act)
         X, theta = x.copy(), theta0.copy()
@@ -150,10 +161,16 @@ def coulomb_newton(problem, x: np.ndarray, rounds: int = 4, steps: int = 4):
                 break
         corrected = _corrected(problem, X, theta, act, system.residual(X))
         if (np.concatenate(corrected) == np.concatenate(act)).all():  # the same set: every mask equal
-            p_N, p_T = np.maximum(X[0:3 * m:3], 0.0), X[:3 * m].reshape(m, 3)[:, 1:]
-            return p_N, np.where(act.sliding, theta, np.arctan2(p_T[:, 1], p_T[:, 0])), X
+            return newton_answer(X, theta, act.sliding, m)
         act = corrected
     return None
+
+
+def newton_answer(X: np.ndarray, theta: np.ndarray, sliding: np.ndarray, m: int):
+    """(pbar_N, theta, X) of a Newton solution X, theta on a set whose sliding contacts are ``sliding``:
+    the normal impulses, the sliding contacts' angles and the others' friction directions."""
+    p_N, p_T = np.maximum(X[0:3 * m:3], 0.0), X[:3 * m].reshape(m, 3)[:, 1:]
+    return p_N, np.where(sliding, theta, np.arctan2(p_T[:, 1], p_T[:, 0])), X
 
 
 class _NewtonSystem:

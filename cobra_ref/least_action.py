@@ -105,18 +105,19 @@ def delassus(J: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def solve_least_action(problem: LeastAction, x_start=None, solve_qp=solve_box_qp, max_iter: int = FP_MAX,
-                       tol: float = FP_TOL) -> tuple[np.ndarray, LeastActionInfo]:
+                       tol: float = FP_TOL, first=None) -> tuple[np.ndarray, LeastActionInfo]:
     """The impulses x of [COBRA] eq. (6) with Coulomb's circle, and how they were found.
 
     Implements: [COBRA] eq. (6), its friction by the fixed point of the module docstring.
     ``x_start``: where the loop starts (the previous step's impulses; default zero);
-    ``solve_qp(H, c, lo, hi, x0) -> BoxQPSolution``: the box-QP solver of each iterate (OSQP).
+    ``solve_qp(H, c, lo, hi, x0) -> BoxQPSolution``: the box-QP solver of each iterate (OSQP);
+    ``first``: ``guess(problem, x_start)`` if it was computed already (the batched step).
     """
     m, n = problem.m, len(problem.c)
     if n == 0:  # no contact and no servo row: nothing to solve
         return np.zeros(0), LeastActionInfo(True, 0, 0, 0, 0.0, "solved")
     x = np.zeros(n) if x_start is None else np.asarray(x_start, dtype=float)
-    pbar_N, theta, x = guess(problem, x)
+    pbar_N, theta, x = guess(problem, x) if first is None else first
     qp_iterations, qp_solves, floor = 0, 0, impulse_floor(problem)
     for k in range(1, max_iter + 1):
         # the box QP with the friction bound mu pbar_N, in tangent frames turned by theta
@@ -251,9 +252,15 @@ def guess(problem: LeastAction, x: np.ndarray, theta=None):
     The update of the friction fixed point (module docstring). ``theta``: the angles x
     was solved with, kept for sticking contacts by the plain update.
     """
+    return chosen_guess(problem, x, coulomb_newton(problem, x), theta)
+
+
+def chosen_guess(problem: LeastAction, x: np.ndarray, newton, theta=None):
+    """``guess`` given Newton's answer ``newton`` from x (``coulomb_newton``, or None): that answer
+    unless it failed or grows the normal impulses more than ``NEWTON_MAX_GROWTH`` times, else the
+    plain update from x."""
     m = problem.m
     p_N = np.maximum(x[0:3 * m:3], 0.0)
-    newton = coulomb_newton(problem, x)
     if newton is not None and (p_N.sum() <= 0.0 or newton[0].sum() <= NEWTON_MAX_GROWTH * p_N.sum()):
         return newton
     H = hessian(problem, p_N)

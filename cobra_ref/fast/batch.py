@@ -22,7 +22,12 @@ from ..model import Model
 from ..step import StepSettings, midpoint_velocity
 from .chain import ChainTerms
 from .contacts import contact_jacobian_batch, find_contacts_batch
+from .newton_batch import first_guesses
 from .stepper import FastStepper
+
+# the fewest members whose first guesses are batched: for one or two members, each member's own
+# Newton's method is faster than the batched round's set-up
+BATCHED_NEWTON_FROM = 3
 
 
 def same_bodies(a: Model, b: Model) -> bool:
@@ -63,14 +68,38 @@ class BatchStepper:
         contacts = find_contacts_batch(self.model, terms.R, terms.o, self.settings.margin)
         J_c = contact_jacobian_batch(self.chain, terms.S, contacts)
         self.batched_seconds += time.perf_counter() - start
-        out = []
-        for j, k in enumerate(active):
-            try:
-                own = ChainTerms(*(part[j] for part in terms))
-                out.append(self.members[k].step(Q[k], QD[k], t, references[k], terms=own, contacts=contacts[j],
-                                                J_c=J_c[j]))
-            except KeyboardInterrupt:
-                raise
-            except Exception as exc:  # this member fails; the others go on
-                out.append(exc)
-        return out
+        prepared = [self._member(k, "prepare", Q[k], QD[k], t, references[k], None,
+                                 ChainTerms(*(part[j] for part in terms)), contacts[j], J_c[j])
+                    for j, k in enumerate(active)]
+        firsts = self._first_guesses(prepared)
+        return [p if isinstance(p, Exception) else self._member(k, "finish", p, first)
+                for k, p, first in zip(active, prepared, firsts)]
+
+    def _member(self, k: int, phase: str, *args):
+        """Member k's ``FastStepper.prepare`` or ``finish`` on ``args``, or the exception it raised
+        (that member fails; the others go on)."""
+        try:
+            return getattr(self.members[k], phase)(*args)
+        except KeyboardInterrupt:
+            raise
+        except Exception as exc:
+            return exc
+
+    def _first_guesses(self, prepared) -> list:
+        """The friction loop's first guess of each prepared member with rows to solve, batched
+        (``newton_batch.first_guesses``); None for the others (their own ``finish`` computes it)."""
+        start = time.perf_counter()
+        solving = [j for j, p in enumerate(prepared) if not isinstance(p, Exception) and len(p.system.problem.c)]
+        firsts = [None] * len(prepared)
+        if len(solving) < BATCHED_NEWTON_FROM:
+            return firsts
+        try:
+            guesses = first_guesses([prepared[j].system.problem for j in solving], [prepared[j].x_start for j in solving])
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError):
+            # a member's data the batched arithmetic cannot take: every member computes its own guess
+            # (the same numbers), and the member at fault fails alone
+            guesses = [None] * len(solving)
+        for j, guess in zip(solving, guesses):
+            firsts[j] = guess
+        self.batched_seconds += time.perf_counter() - start
+        return firsts

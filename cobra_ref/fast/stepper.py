@@ -21,6 +21,7 @@ spent in each phase of a step is summed in ``timing`` (``cobra-ref bench``).
 from __future__ import annotations
 
 import time
+from typing import NamedTuple
 
 import numpy as np
 from scipy.linalg import get_lapack_funcs
@@ -40,6 +41,14 @@ PHASES = ("dynamics", "contacts", "qp", "rest")
 # LAPACK's Cholesky factor and triangular solves, called directly (scipy.linalg's wrappers cost
 # more than the 12 x 12 to 23 x 23 solves themselves)
 _potrf, _potrs, _trtrs = get_lapack_funcs(("potrf", "potrs", "trtrs"), (np.zeros(1),))
+
+
+class Prepared(NamedTuple):
+    """A step prepared by ``FastStepper.prepare`` for ``FastStepper.finish``."""
+
+    system: StepSystem  # the step's terms, rows and least-action problem
+    x_start: np.ndarray  # where its friction loop starts: the warm start
+    clock: list  # the times its phases ended so far (perf_counter)
 
 
 class FastStepper:
@@ -83,6 +92,11 @@ class FastStepper:
         ``terms``: this step's chain terms at (q, ``step.midpoint_velocity(qd, self.memory)``), and
         ``contacts`` with their Jacobian ``J_c``, if they were computed already (the batched engine,
         :mod:`cobra_ref.fast.batch`)."""
+        return self.finish(self.prepare(q, qd, t, reference, tau_ext, terms, contacts, J_c))
+
+    def prepare(self, q, qd, t: float, reference, tau_ext=None, terms=None, contacts=None, J_c=None) -> Prepared:
+        """Steps 1-5 of ``step`` (same arguments): the least-action problem of the step and where its
+        solve starts, with what ``finish`` needs."""
         s, model, F, P = self.settings, self.model, self.free, self.prescribed
         dt, servo = s.dt, s.joint_servo
         clock = [time.perf_counter()]
@@ -111,13 +125,24 @@ class FastStepper:
         G = B.T @ B
         problem = least_action_problem(model, G, J @ qd_next, contacts, s, servo_start(self.joints, q, qd, servo_ref),
                                        J_c[0::3] @ qd)
+        potential = float(-self.chain.mass @ (terms.com @ model.gravity))
+        system = StepSystem(q, qd, M, h, tau_ext, qd_next, F, Minv_JT, contacts, J_c, G, problem, self.joints, q_ref,
+                            potential)
+        x_start = warm_start(contacts, self.memory, len(problem.c))
         clock.append(time.perf_counter())
+        return Prepared(system, x_start, clock)
+
+    def finish(self, prepared: Prepared, first=None) -> StepResult:
+        """Steps 6-7 of ``step`` from ``prepare``'s problem: the impulses, then the step's result.
+        ``first``: the friction loop's first guess from the start (``least_action.guess``), if the
+        batched step computed it."""
+        system, x_start, clock = prepared
+        problem = system.problem
         # Step 6: eq. (6); where the certified solves leave the fixed point unconverged (their exact
         # active sets can send Newton's guess elsewhere than OSQP's answers do), the reference step's
         # loop, OSQP on every iterate, solves it again from the same start
         self.qp.new_step()
-        x_start = warm_start(contacts, self.memory, len(problem.c))
-        x, info = solve_least_action(problem, x_start, self.qp)
+        x, info = solve_least_action(problem, x_start, self.qp, first=first)
         if not info.converged:
             x, again = solve_least_action(problem, x_start)
             info = again._replace(iterations=info.iterations + again.iterations,
@@ -125,10 +150,7 @@ class FastStepper:
                                   qp_solves=info.qp_solves + again.qp_solves)
         clock.append(time.perf_counter())
         # Step 7: velocity, torques, energy ledger, position (the reference step's step_result)
-        potential = float(-self.chain.mass @ (terms.com @ model.gravity))
-        system = StepSystem(q, qd, M, h, tau_ext, qd_next, F, Minv_JT, contacts, J_c, G, problem, self.joints, q_ref,
-                            potential)
-        result = step_result(model, system, x, info, s, self._integrate)
+        result = step_result(self.model, system, x, info, self.settings, self._integrate)
         self.memory = result.memory
         clock.append(time.perf_counter())
         for phase, t0, t1 in zip(PHASES, clock[:-1], clock[1:]):
