@@ -23,7 +23,8 @@ PHYSICS_MODULES = (
     "step.py", "steppers.py", "start.py", "placement.py", "simulate.py", "gaits.py", "reference.py",
     "trajectory.py",
     "fast/chain.py", "fast/contacts.py", "fast/gaps.py", "fast/least_action.py", "fast/active_set.py",
-    "fast/stepper.py", "batch.py", "fast/batch.py", "fast/newton_batch.py",
+    "fast/stepper.py", "batch.py", "fast/batch.py", "fast/members.py", "fast/newton_batch.py",
+    "fast/problem_batch.py",
 )
 # ... and the optimizer's cost and rollout
 PLANNING_MODULES = ("planning/cost.py", "planning/problem.py")

@@ -2,14 +2,21 @@
 
 For performance: K members, each with its own state, joint reference and warm start, share one
 model and one step size and are advanced together, one ``BatchStepper.step`` per step for all of
-them (:mod:`cobra_ref.batch` runs and records them). Batched so far: the chain terms (poses,
-motion subspaces, M and h) of every member in one call of
-:meth:`cobra_ref.fast.chain.ChainModel.terms` with a leading K axis, and the contacts and their
-Jacobians (:func:`cobra_ref.fast.contacts.find_contacts_batch`, ``contact_jacobian_batch``). The
-rest of each member's step (its free velocity, least-action problem and solve, and result) is its
-own :class:`cobra_ref.fast.stepper.FastStepper`'s, given those. Each member takes its single run's
-steps bit for bit (``tests/test_batch.py``). A member whose step fails gets its exception back in
-place of a result; the others go on.
+them (:mod:`cobra_ref.batch` runs and records them). Batched so far, for all members in one call
+each:
+
+* the chain terms (poses, motion subspaces, M and h): :meth:`cobra_ref.fast.chain.ChainModel.terms`
+  with a leading K axis;
+* the contacts and their Jacobians (:func:`cobra_ref.fast.contacts.find_contacts_batch`,
+  ``contact_jacobian_batch``);
+* from ``BATCHED_FROM`` members on, the rows of the least-action problems
+  (:func:`cobra_ref.fast.problem_batch.least_action_problems`) and the friction loop's first guess
+  (:func:`cobra_ref.fast.newton_batch.first_guesses`).
+
+The rest of each member's step (its free velocity and G, the friction loop's QPs, the result) is
+its own :class:`cobra_ref.fast.stepper.FastStepper`'s (``rows``, ``posed``, ``finish``), given
+those. Each member takes its single run's steps bit for bit (``tests/test_batch.py``). A member
+whose step fails gets its exception back in place of a result; the others go on.
 """
 
 from __future__ import annotations
@@ -23,11 +30,12 @@ from ..step import StepSettings, midpoint_velocity
 from .chain import ChainTerms
 from .contacts import contact_jacobian_batch, find_contacts_batch
 from .newton_batch import first_guesses
+from .problem_batch import least_action_problems
 from .stepper import FastStepper
 
-# the fewest members whose first guesses are batched: for one or two members, each member's own
-# Newton's method is faster than the batched round's set-up
-BATCHED_NEWTON_FROM = 3
+# the fewest members whose least-action problems and first guesses are batched: for one or two,
+# each member's own are faster than the batched parts' set-up
+BATCHED_FROM = 3
 
 
 def same_bodies(a: Model, b: Model) -> bool:
@@ -68,9 +76,14 @@ class BatchStepper:
         contacts = find_contacts_batch(self.model, terms.R, terms.o, self.settings.margin)
         J_c = contact_jacobian_batch(self.chain, terms.S, contacts)
         self.batched_seconds += time.perf_counter() - start
-        prepared = [self._member(k, "prepare", Q[k], QD[k], t, references[k], None,
-                                 ChainTerms(*(part[j] for part in terms)), contacts[j], J_c[j])
-                    for j, k in enumerate(active)]
+        own_terms = [ChainTerms(*(part[j] for part in terms)) for j in range(len(active))]
+        if len(active) < BATCHED_FROM:  # each member's own problem and guess are faster
+            prepared = [self._member(k, "prepare", Q[k], QD[k], t, references[k], None, own_terms[j], contacts[j],
+                                     J_c[j]) for j, k in enumerate(active)]
+            return [p if isinstance(p, Exception) else self._member(k, "finish", p) for k, p in zip(active, prepared)]
+        rows = [self._member(k, "rows", Q[k], QD[k], t, references[k], None, own_terms[j], contacts[j], J_c[j])
+                for j, k in enumerate(active)]
+        prepared = self._posed(rows, active)
         firsts = self._first_guesses(prepared)
         return [p if isinstance(p, Exception) else self._member(k, "finish", p, first)
                 for k, p, first in zip(active, prepared, firsts)]
@@ -85,13 +98,32 @@ class BatchStepper:
         except Exception as exc:
             return exc
 
+    def _posed(self, rows, active) -> list:
+        """Each member's step of ``rows`` prepared with its least-action problem, the problems written
+        together (``problem_batch.least_action_problems``); a member's exception stays in its place."""
+        start = time.perf_counter()
+        ready = [j for j, r in enumerate(rows) if not isinstance(r, Exception)]
+        if not ready:
+            return rows
+        try:
+            problems = least_action_problems([self.members[active[j]].model for j in ready],
+                                             [(rows[j].system.G, rows[j].problem_args) for j in ready])
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError):
+            problems = None  # a member's data the batched arithmetic cannot take: each writes its own
+        self.batched_seconds += time.perf_counter() - start
+        prepared = list(rows)
+        for i, j in enumerate(ready):
+            prepared[j] = (self._member(active[j], "pose", rows[j]) if problems is None else
+                           self._member(active[j], "posed", rows[j], problems[i]))
+        return prepared
+
     def _first_guesses(self, prepared) -> list:
         """The friction loop's first guess of each prepared member with rows to solve, batched
         (``newton_batch.first_guesses``); None for the others (their own ``finish`` computes it)."""
         start = time.perf_counter()
         solving = [j for j, p in enumerate(prepared) if not isinstance(p, Exception) and len(p.system.problem.c)]
         firsts = [None] * len(prepared)
-        if len(solving) < BATCHED_NEWTON_FROM:
+        if not solving:
             return firsts
         try:
             guesses = first_guesses([prepared[j].system.problem for j in solving], [prepared[j].x_start for j in solving])

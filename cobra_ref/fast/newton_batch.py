@@ -6,9 +6,9 @@ zip(problems, starts)]``, bit for bit, for the K members of a batched step
 (its start, the Newton iterations on the start's active set, and the check of that set) runs for
 every member together:
 
-* the members' rows and contacts are concatenated (``_Rows``), so each elementwise operation of
-  the single member's code is one NumPy call for all of them, and each per-member maximum is a
-  segment maximum (``_segment_max``);
+* the members' rows and contacts are concatenated (``members.MemberRows``), so each elementwise
+  operation of the single member's code is one NumPy call for all of them, and each per-member
+  maximum is a segment maximum (``members.segment_max``);
 * the members' Newton matrices K lie side by side in one flat buffer, each (size, size) in C order
   as the single member's, written through index arrays built once per round (``_System``);
 * the matrix-vector products and LU solves stay per member: the same BLAS and LAPACK calls on
@@ -21,13 +21,12 @@ it (``least_action.chosen_guess``). Tested equal to ``guess`` member by member.
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
 
 from ..compliance import STICK_SLIP_MAX, stick_slip_compliance
 from ..coulomb_newton import _SQRT_NEWTON_TOL, RELEASED, ActiveSet, _gesv, hessian, newton_answer, newton_rounds
 from ..least_action import chosen_guess
+from .members import member_rows, segment_max
 
 ROUNDS, STEPS = 4, 4  # coulomb_newton's rounds and Newton steps per round
 
@@ -60,60 +59,12 @@ def first_guesses(problems, starts) -> list:
     return out
 
 
-class _Rows(NamedTuple):
-    """Where each member's rows and contacts lie in the concatenation of K members."""
-
-    K: int
-    m: np.ndarray  # (K,) contacts per member
-    n: np.ndarray  # (K,) rows per member
-    row0: np.ndarray  # (K,) each member's first row
-    contact0: np.ndarray  # (K,) each member's first contact
-    servo0: np.ndarray  # (K,) each member's first servo row, among the servo rows
-    of_row: np.ndarray  # (sum n,) the member of each row
-    of_contact: np.ndarray  # (sum m,) the member of each contact
-    of_servo: np.ndarray  # the member of each servo row
-    N: np.ndarray  # (sum m,) each contact's normal row
-    T1: np.ndarray  # ... its first tangent row
-    T2: np.ndarray  # ... its second tangent row
-    servo: np.ndarray  # the servo rows
-
-    def row_slice(self, k: int) -> slice:
-        return slice(self.row0[k], self.row0[k] + self.n[k])
-
-    def contact_slice(self, k: int) -> slice:
-        return slice(self.contact0[k], self.contact0[k] + self.m[k])
-
-    def slices(self, k: int) -> tuple:
-        """Member k's slices of an ``ActiveSet``'s four masks."""
-        servo = slice(self.servo0[k], self.servo0[k] + self.n[k] - 3 * self.m[k])
-        return self.contact_slice(k), self.contact_slice(k), servo, servo
-
-
-def _rows(m: np.ndarray, n: np.ndarray) -> _Rows:
-    """The ``_Rows`` of members with m contacts and n rows each."""
-    K, s = len(m), n - 3 * m
-    row0, contact0, servo0 = np.cumsum(n) - n, np.cumsum(m) - m, np.cumsum(s) - s
-    N = np.repeat(row0, m) + 3 * (np.arange(m.sum()) - np.repeat(contact0, m))
-    servo = np.repeat(row0 + 3 * m, s) + np.arange(s.sum()) - np.repeat(servo0, s)
-    member = np.arange(K)
-    return _Rows(K, m, n, row0, contact0, servo0, np.repeat(member, n), np.repeat(member, m), np.repeat(member, s),
-                 N, N + 1, N + 2, servo)
-
-
-def _segment_max(values: np.ndarray, member: np.ndarray, K: int) -> np.ndarray:
-    """(K,) the maximum of ``values`` over each member's entries, 0 where it has none (ndarray.max
-    with initial 0)."""
-    out = np.zeros(K)
-    np.maximum.at(out, member, values)
-    return out
-
-
 class _Batch:
-    """The K problems' data, concatenated (``_Rows``)."""
+    """The K problems' data, concatenated (``members.MemberRows``)."""
 
     def __init__(self, problems):
         self.problems = problems
-        self.rows = R = _rows(np.array([p.m for p in problems]), np.array([len(p.c) for p in problems]))
+        self.rows = R = member_rows(np.array([p.m for p in problems]), np.array([len(p.c) for p in problems]))
         self.c = np.concatenate([p.c for p in problems])
         self.mu = np.concatenate([p.mu for p in problems])
         self.lo = np.concatenate([p.lo for p in problems])
@@ -123,7 +74,7 @@ class _Batch:
         self.R_max = STICK_SLIP_MAX * self.G_TT
         self.H_diagonal = H_diagonal
         self.v_s = [p.stiction_velocity for p in problems]
-        hi_max = _segment_max(np.abs(self.hi), R.of_servo, R.K)[R.of_servo]
+        hi_max = segment_max(np.abs(self.hi), R.of_servo, R.K)[R.of_servo]
         # the servo rows' tolerances at a bound: active_set's (floored) and _corrected's
         self.hi_scale, self.hi_tol = 1e-9 * np.maximum(hi_max, 1e-300), 1e-9 * hi_max
 
@@ -154,7 +105,7 @@ def _start(b: _Batch, x: np.ndarray):
     # coulomb_newton.active_set, with the tangential diagonal of the stick-slip H
     a = 0.5 * ((b.H_diagonal[R.T1] + R_T) + (b.H_diagonal[R.T2] + R_T))
     p_N = x[R.N]
-    released = p_N <= RELEASED * np.maximum(_segment_max(p_N, R.of_contact, R.K), 1e-300)[R.of_contact]
+    released = p_N <= RELEASED * np.maximum(segment_max(p_N, R.of_contact, R.K), 1e-300)[R.of_contact]
     sliding = ~released & (np.hypot(p_T1 - r_T1 / a, p_T2 - r_T2 / a) > b.mu * p_N)
     x_s, r_s = x[R.servo], r[R.servo]
     act = ActiveSet(released, sliding, (x_s <= b.lo + b.hi_scale) & (r_s >= 0), (x_s >= b.hi - b.hi_scale) & (r_s <= 0))
@@ -175,16 +126,16 @@ def _corrected(b: _Batch, X, theta, act: ActiveSet, r) -> ActiveSet:
     """``coulomb_newton._corrected`` of every member: the active set its Newton solution asks for."""
     R = b.rows
     p_N, p_T1, p_T2, r_N, r_T1, r_T2 = X[R.N], X[R.T1], X[R.T2], r[R.N], r[R.T1], r[R.T2]
-    tol = 1e-9 * _segment_max(np.abs(p_N), R.of_contact, R.K)[R.of_contact]
+    tol = 1e-9 * segment_max(np.abs(p_N), R.of_contact, R.K)[R.of_contact]
     r_max = np.maximum(np.maximum(np.abs(r_N), np.abs(r_T1)), np.abs(r_T2))
-    tol_r = 1e-9 * _segment_max(r_max, R.of_contact, R.K)[R.of_contact]
+    tol_r = 1e-9 * segment_max(r_max, R.of_contact, R.K)[R.of_contact]
     outside = np.hypot(p_T1, p_T2) > b.mu * p_N + tol
     turned = np.cos(theta) * r_T1 + np.sin(theta) * r_T2 > tol_r
     engaged = act.released & (r_N < -tol_r)
     released = (act.released & ~engaged) | (~act.released & (p_N < -tol))
     sliding = ~released & ((act.sliding & ~turned) | (~act.sliding & outside) | engaged)
     x_s, r_s = X[R.servo], r[R.servo]
-    tol_rs = 1e-9 * _segment_max(np.abs(r_s), R.of_servo, R.K)[R.of_servo]
+    tol_rs = 1e-9 * segment_max(np.abs(r_s), R.of_servo, R.K)[R.of_servo]
     free = ~act.at_lo & ~act.at_hi
     at_lo = (act.at_lo & (r_s >= -tol_rs)) | (free & (x_s < b.lo - b.hi_tol))
     at_hi = (act.at_hi & (r_s <= tol_rs)) | (free & (x_s > b.hi + b.hi_tol))
@@ -209,8 +160,8 @@ def _newton_round(b: _Batch, act: ActiveSet, x: np.ndarray, theta0: np.ndarray):
             d[system.F_slice(k)] = d_k
         X = np.where(going[R.of_row], X + d[system.F_row], X)
         theta[system.S] = np.where(going[system.S_member], theta[system.S] + d[system.F_D], theta[system.S])
-        step = _segment_max(np.abs(d), system.F_member, R.K)
-        going &= ~(step <= _SQRT_NEWTON_TOL * _segment_max(np.abs(X), R.of_row, R.K))
+        step = segment_max(np.abs(d), system.F_member, R.K)
+        going &= ~(step <= _SQRT_NEWTON_TOL * segment_max(np.abs(X), R.of_row, R.K))
         if not going.any():
             break
     return X, theta, failed

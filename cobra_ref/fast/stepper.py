@@ -51,6 +51,14 @@ class Prepared(NamedTuple):
     clock: list  # the times its phases ended so far (perf_counter)
 
 
+class Rows(NamedTuple):
+    """A step's terms and rows from ``FastStepper.rows``, before its least-action problem."""
+
+    system: StepSystem  # steps 1-5 but the problem (None)
+    problem_args: tuple  # (c_free, contacts, settings, servo start, w_start): least_action_problem's after G
+    clock: list  # the times its phases ended so far (perf_counter)
+
+
 class FastStepper:
     """Advances (q, qd) by one step (module docstring); keeps the warm start between steps."""
 
@@ -97,6 +105,11 @@ class FastStepper:
     def prepare(self, q, qd, t: float, reference, tau_ext=None, terms=None, contacts=None, J_c=None) -> Prepared:
         """Steps 1-5 of ``step`` (same arguments): the least-action problem of the step and where its
         solve starts, with what ``finish`` needs."""
+        return self.pose(self.rows(q, qd, t, reference, tau_ext, terms, contacts, J_c))
+
+    def rows(self, q, qd, t: float, reference, tau_ext=None, terms=None, contacts=None, J_c=None) -> Rows:
+        """Steps 1-4 and the rows of step 5 (``prepare``'s arguments): everything but the least-action
+        problem, and what ``step.least_action_problem`` writes it from."""
         s, model, F, P = self.settings, self.model, self.free, self.prescribed
         dt, servo = s.dt, s.joint_servo
         clock = [time.perf_counter()]
@@ -123,14 +136,21 @@ class FastStepper:
         B = _trtrs(L, J[:, F].T, lower=1)[0]
         Minv_JT = _trtrs(L, B, lower=1, trans=1)[0]
         G = B.T @ B
-        problem = least_action_problem(model, G, J @ qd_next, contacts, s, servo_start(self.joints, q, qd, servo_ref),
-                                       J_c[0::3] @ qd)
         potential = float(-self.chain.mass @ (terms.com @ model.gravity))
-        system = StepSystem(q, qd, M, h, tau_ext, qd_next, F, Minv_JT, contacts, J_c, G, problem, self.joints, q_ref,
+        system = StepSystem(q, qd, M, h, tau_ext, qd_next, F, Minv_JT, contacts, J_c, G, None, self.joints, q_ref,
                             potential)
-        x_start = warm_start(contacts, self.memory, len(problem.c))
-        clock.append(time.perf_counter())
-        return Prepared(system, x_start, clock)
+        return Rows(system, (J @ qd_next, contacts, s, servo_start(self.joints, q, qd, servo_ref), J_c[0::3] @ qd), clock)
+
+    def pose(self, rows: Rows) -> Prepared:
+        """The step of ``rows`` prepared with its least-action problem (``step.least_action_problem``)."""
+        return self.posed(rows, least_action_problem(self.model, rows.system.G, *rows.problem_args))
+
+    def posed(self, rows: Rows, problem) -> Prepared:
+        """The step of ``rows`` prepared with its least-action ``problem`` (``prepare``'s end)."""
+        system = rows.system._replace(problem=problem)
+        x_start = warm_start(system.contacts, self.memory, len(problem.c))
+        rows.clock.append(time.perf_counter())
+        return Prepared(system, x_start, rows.clock)
 
     def finish(self, prepared: Prepared, first=None) -> StepResult:
         """Steps 6-7 of ``step`` from ``prepare``'s problem: the impulses, then the step's result.
