@@ -105,43 +105,73 @@ def delassus(J: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def solve_least_action(problem: LeastAction, x_start=None, solve_qp=solve_box_qp, max_iter: int = FP_MAX,
-                       tol: float = FP_TOL, first=None) -> tuple[np.ndarray, LeastActionInfo]:
+                       tol: float = FP_TOL) -> tuple[np.ndarray, LeastActionInfo]:
     """The impulses x of [COBRA] eq. (6) with Coulomb's circle, and how they were found.
 
     Implements: [COBRA] eq. (6), its friction by the fixed point of the module docstring.
     ``x_start``: where the loop starts (the previous step's impulses; default zero);
-    ``solve_qp(H, c, lo, hi, x0) -> BoxQPSolution``: the box-QP solver of each iterate (OSQP);
-    ``first``: ``guess(problem, x_start)`` if it was computed already (the batched step).
+    ``solve_qp(H, c, lo, hi, x0) -> BoxQPSolution``: the box-QP solver of each iterate (OSQP).
     """
-    m, n = problem.m, len(problem.c)
+    n = len(problem.c)
     if n == 0:  # no contact and no servo row: nothing to solve
         return np.zeros(0), LeastActionInfo(True, 0, 0, 0, 0.0, "solved")
     x = np.zeros(n) if x_start is None else np.asarray(x_start, dtype=float)
-    pbar_N, theta, x = guess(problem, x) if first is None else first
-    qp_iterations, qp_solves, floor = 0, 0, impulse_floor(problem)
-    for k in range(1, max_iter + 1):
-        # the box QP with the friction bound mu pbar_N, in tangent frames turned by theta
-        H = hessian(problem, pbar_N)
-        lo, hi = bounds(problem, pbar_N)
-        sol = solve_qp(turn_tangents(H, theta, m), turn(problem.c, theta, m), lo, hi, turn(x, theta, m))
-        x = turn(sol.x, -theta, m)
+    return fixed_point(problem, FixedPoint(1, *guess(problem, x), 0, 0), solve_qp, max_iter, tol)
+
+
+class FixedPoint(NamedTuple):
+    """Where the friction loop of ``solve_least_action`` stands: iterate k is next, with the guess
+    (pbar_N, theta) from x, and the OSQP iterations and solves so far."""
+
+    k: int
+    pbar_N: np.ndarray
+    theta: np.ndarray
+    x: np.ndarray
+    qp_iterations: int
+    qp_solves: int
+
+
+def fixed_point(problem: LeastAction, start: FixedPoint, solve_qp, max_iter: int = FP_MAX,
+                tol: float = FP_TOL) -> tuple[np.ndarray, LeastActionInfo]:
+    """``solve_least_action``'s loop from ``start`` (module docstring): iterates until the natural
+    residual is below ``tol`` or iterate ``max_iter`` is done."""
+    k, pbar_N, theta, x, qp_iterations, qp_solves = start
+    floor = impulse_floor(problem)
+    for k in range(start.k, max_iter + 1):
+        x, sol, residual = fixed_point_iterate(problem, pbar_N, theta, x, solve_qp, floor)
         qp_iterations, qp_solves = qp_iterations + sol.iterations, qp_solves + sol.solves
         # stop when the guesses are the ones this solution implies
-        p_N, p_T, z = coulomb_split(x, H @ x + problem.c, H, m)
-        residual = natural_residual(p_N, p_T, z, pbar_N, problem.mu, floor)
         if residual <= tol:
             break
-        last, last_theta = pbar_N, theta
-        pbar_N, theta, x = guess(problem, x, theta)
-        # a loop that has not converged by now cycles (the plain update can alternate between two
-        # guesses): average the guess with the last one (Krasnosel'skii-Mann), the normal impulses
-        # pbar_N <- (pbar_N_last + pbar_N) / 2 and each friction direction e(theta) <- the
-        # direction of e(theta_last) + e(theta) (kept as it is where the two are opposite)
-        if k >= FP_RELAX_AFTER:
-            pbar_N = 0.5 * (last + pbar_N)
-            theta = mean_angle(last_theta, theta)
+        pbar_N, theta, x = next_guess(problem, x, pbar_N, theta, k)
     return project_friction(x, problem.mu), LeastActionInfo(residual <= tol, k, qp_iterations, qp_solves,
                                                             residual, sol.status)
+
+
+def fixed_point_iterate(problem: LeastAction, pbar_N, theta, x, solve_qp, floor: float):
+    """(x, the QP's solution, the natural residual): one iterate of the friction loop, the box QP
+    with the friction bound mu pbar_N in tangent frames turned by theta, solved from x."""
+    m = problem.m
+    H = hessian(problem, pbar_N)
+    lo, hi = bounds(problem, pbar_N)
+    sol = solve_qp(turn_tangents(H, theta, m), turn(problem.c, theta, m), lo, hi, turn(x, theta, m))
+    x = turn(sol.x, -theta, m)
+    p_N, p_T, z = coulomb_split(x, H @ x + problem.c, H, m)
+    return x, sol, natural_residual(p_N, p_T, z, pbar_N, problem.mu, floor)
+
+
+def next_guess(problem: LeastAction, x, pbar_N, theta, k: int):
+    """The guess (pbar_N, theta, x) after iterate k left the impulses x, solved with (pbar_N, theta)."""
+    last, last_theta = pbar_N, theta
+    pbar_N, theta, x = guess(problem, x, theta)
+    # a loop that has not converged by now cycles (the plain update can alternate between two
+    # guesses): average the guess with the last one (Krasnosel'skii-Mann), the normal impulses
+    # pbar_N <- (pbar_N_last + pbar_N) / 2 and each friction direction e(theta) <- the
+    # direction of e(theta_last) + e(theta) (kept as it is where the two are opposite)
+    if k >= FP_RELAX_AFTER:
+        pbar_N = 0.5 * (last + pbar_N)
+        theta = mean_angle(last_theta, theta)
+    return pbar_N, theta, x
 
 
 def mean_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:

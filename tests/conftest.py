@@ -1,4 +1,5 @@
-"""Shared fixtures: seeded rng, the smallest models that show each fact, the Agg backend."""
+"""Shared fixtures: seeded rng, the smallest models that show each fact, the Agg backend, the
+least-action problems of real steps."""
 
 import os
 
@@ -44,3 +45,41 @@ def floating_chain4():
 from cobra_ref.infra.executors import limit_blas_threads  # noqa: E402
 
 limit_blas_threads(1)
+
+
+@pytest.fixture(scope="session")
+def least_action_steps():
+    """(problem, warm start) of every step of four short runs: C meeting its box, sidewinding, J
+    with the rigid law (no stick-slip compliance, v_s = 0) and sidewinding with prescribed joints
+    (no servo rows); and every tenth of those with servo rows once more with their torque bounds cut
+    to 2 % and the start clipped to them, so that servo rows start and end saturated: the batched
+    solves' worked examples."""
+    from cobra_ref.fast.stepper import FastStepper
+    from cobra_ref.gaits import gait
+    from cobra_ref.simulate import simulate
+    from cobra_ref.start import initial_state
+    from cobra_ref.step import StepSettings
+
+    collected = []
+    prepare = FastStepper.prepare
+
+    def keep(self, *args, **kwargs):
+        prepared = prepare(self, *args, **kwargs)
+        collected.append((prepared.system.problem, prepared.x_start))
+        return prepared
+
+    model = cr.cobra_model()
+    runs = [("C", StepSettings(dt=1e-3), 1.5), ("sidewinding", StepSettings(dt=1e-3), 0.5),
+            ("J", StepSettings(dt=1e-3, contact="rigid"), 0.3), ("sidewinding", StepSettings(dt=1e-3, servo="prescribed"), 0.3)]
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(FastStepper, "prepare", keep)
+        for name, settings, duration in runs:
+            reference = gait(name)
+            simulate(model, reference, duration, settings, *initial_state(model, reference, settings))
+    collected = [(p, x) for p, x in collected if len(p.c)]
+    servoed = [(p, x) for p, x in collected if len(p.lo)][::10]
+    for p, x in servoed:
+        lo, hi, x = 0.02 * p.lo, 0.02 * p.hi, x.copy()
+        x[3 * p.m:] = np.clip(x[3 * p.m:], lo, hi)
+        collected.append((p._replace(lo=lo, hi=hi), x))
+    return collected

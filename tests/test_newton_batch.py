@@ -4,44 +4,13 @@ import numpy as np
 import pytest
 
 from cobra_ref.fast import newton_batch
-from cobra_ref.fast.stepper import FastStepper
-from cobra_ref.gaits import gait
+from cobra_ref.fast.members import Problems
 from cobra_ref.least_action import LeastAction, guess
-from cobra_ref.robots import cobra_model
-from cobra_ref.simulate import simulate
-from cobra_ref.start import initial_state
-from cobra_ref.step import StepSettings
 
 
 @pytest.fixture(scope="module")
-def problems():
-    """(problem, warm start) of every step of four short runs: C meeting its box, sidewinding, J
-    with the rigid law (no stick-slip compliance, v_s = 0) and sidewinding with prescribed joints
-    (no servo rows); and every tenth of those with servo rows once more with their torque bounds cut
-    to 2 % and the start clipped to them, so that servo rows start and end saturated."""
-    collected = []
-    prepare = FastStepper.prepare
-
-    def keep(self, *args, **kwargs):
-        prepared = prepare(self, *args, **kwargs)
-        collected.append((prepared.system.problem, prepared.x_start))
-        return prepared
-
-    model = cobra_model()
-    runs = [("C", StepSettings(dt=1e-3), 1.5), ("sidewinding", StepSettings(dt=1e-3), 0.5),
-            ("J", StepSettings(dt=1e-3, contact="rigid"), 0.3), ("sidewinding", StepSettings(dt=1e-3, servo="prescribed"), 0.3)]
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(FastStepper, "prepare", keep)
-        for name, settings, duration in runs:
-            reference = gait(name)
-            simulate(model, reference, duration, settings, *initial_state(model, reference, settings))
-    collected = [(p, x) for p, x in collected if len(p.c)]
-    servoed = [(p, x) for p, x in collected if len(p.lo)][::10]
-    for p, x in servoed:
-        lo, hi, x = 0.02 * p.lo, 0.02 * p.hi, x.copy()
-        x[3 * p.m:] = np.clip(x[3 * p.m:], lo, hi)
-        collected.append((p._replace(lo=lo, hi=hi), x))
-    return collected
+def problems(least_action_steps):
+    return least_action_steps
 
 
 def _same(a, b):
@@ -66,7 +35,7 @@ def test_the_runs_exercise_every_branch_of_the_batched_round(problems):
     rows), pinned rows (released contacts, saturated servo rows), members whose active set the
     round corrects (they go on alone) and members of different stiction velocities in one batch."""
     batch = [problems[j] for j in np.random.default_rng(0).permutation(len(problems))[:300]]
-    b = newton_batch._Batch([p for p, _ in batch])
+    b = Problems([p for p, _ in batch])
     x = np.concatenate([x for _, x in batch])
     act, theta0 = newton_batch._start(b, x)
     X, theta, failed = newton_batch._newton_round(b, act, x, theta0)

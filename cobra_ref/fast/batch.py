@@ -10,10 +10,10 @@ each:
 * the contacts and their Jacobians (:func:`cobra_ref.fast.contacts.find_contacts_batch`,
   ``contact_jacobian_batch``);
 * from ``BATCHED_FROM`` members on, the rows of the least-action problems
-  (:func:`cobra_ref.fast.problem_batch.least_action_problems`) and the friction loop's first guess
-  (:func:`cobra_ref.fast.newton_batch.first_guesses`).
+  (:func:`cobra_ref.fast.problem_batch.least_action_problems`) and the vector work of the friction
+  loop's first guess and first iterate (:func:`cobra_ref.fast.iterate_batch.solve_all`).
 
-The rest of each member's step (its free velocity and G, the friction loop's QPs, the result) is
+The rest of each member's step (its free velocity and G, its OSQP and LAPACK solves, the result) is
 its own :class:`cobra_ref.fast.stepper.FastStepper`'s (``rows``, ``posed``, ``finish``), given
 those. Each member takes its single run's steps bit for bit (``tests/test_batch.py``). A member
 whose step fails gets its exception back in place of a result; the others go on.
@@ -29,7 +29,7 @@ from ..model import Model
 from ..step import StepSettings, midpoint_velocity
 from .chain import ChainTerms
 from .contacts import contact_jacobian_batch, find_contacts_batch
-from .newton_batch import first_guesses
+from .iterate_batch import solve_all
 from .problem_batch import least_action_problems
 from .stepper import FastStepper
 
@@ -84,9 +84,9 @@ class BatchStepper:
         rows = [self._member(k, "rows", Q[k], QD[k], t, references[k], None, own_terms[j], contacts[j], J_c[j])
                 for j, k in enumerate(active)]
         prepared = self._posed(rows, active)
-        firsts = self._first_guesses(prepared)
-        return [p if isinstance(p, Exception) else self._member(k, "finish", p, first)
-                for k, p, first in zip(active, prepared, firsts)]
+        solved = self._solved(prepared, active)
+        return [p if isinstance(p, Exception) else s if isinstance(s, Exception) else self._member(k, "finish", p, s)
+                for k, p, s in zip(active, prepared, solved)]
 
     def _member(self, k: int, phase: str, *args):
         """Member k's ``FastStepper.prepare`` or ``finish`` on ``args``, or the exception it raised
@@ -117,21 +117,20 @@ class BatchStepper:
                            self._member(active[j], "posed", rows[j], problems[i]))
         return prepared
 
-    def _first_guesses(self, prepared) -> list:
-        """The friction loop's first guess of each prepared member with rows to solve, batched
-        (``newton_batch.first_guesses``); None for the others (their own ``finish`` computes it)."""
+    def _solved(self, prepared, active) -> list:
+        """Each prepared member's (x, info) of its least-action problem, the friction loops run together
+        (``iterate_batch.solve_all``), or the exception its solve raised; None for a member with no
+        rows (its own ``finish`` has nothing to solve)."""
         start = time.perf_counter()
         solving = [j for j, p in enumerate(prepared) if not isinstance(p, Exception) and len(p.system.problem.c)]
-        firsts = [None] * len(prepared)
+        solved = [None] * len(prepared)
         if not solving:
-            return firsts
-        try:
-            guesses = first_guesses([prepared[j].system.problem for j in solving], [prepared[j].x_start for j in solving])
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError):
-            # a member's data the batched arithmetic cannot take: every member computes its own guess
-            # (the same numbers), and the member at fault fails alone
-            guesses = [None] * len(solving)
-        for j, guess in zip(solving, guesses):
-            firsts[j] = guess
+            return solved
+        qps = [self.members[active[j]].qp for j in solving]
+        for qp in qps:
+            qp.new_step()
+        answers = solve_all([prepared[j].system.problem for j in solving], [prepared[j].x_start for j in solving], qps)
+        for j, answer in zip(solving, answers):
+            solved[j] = answer
         self.batched_seconds += time.perf_counter() - start
-        return firsts
+        return solved

@@ -28,6 +28,7 @@ from .active_set import BoxQP, held_at_bounds, solve_box
 
 LOOSE_EPS = 1e-5  # the first OSQP solve of a step: only a guess of the active set
 LOOSE_MAX_ITER = 200
+GUESSES = ("solved", "solved inaccurate", "maximum iterations reached")  # OSQP's statuses whose answer guesses the set
 
 
 class FastBoxQP:
@@ -58,9 +59,15 @@ class FastBoxQP:
             y0 = np.where(at_lo | at_hi, -(H @ x0 + c), 0.0)
             res = self._osqp(H, c, lo, hi, x0, y0, loose=True)
             solves, iterations = 1, res.info.iter
-            if res.info.status in ("solved", "solved inaccurate", "maximum iterations reached"):
+            if res.info.status in GUESSES:
                 x0, y = res.x, res.y
-        certified = solve_box(BoxQP(H, c, lo, hi), x0, (EPS, EPS), guess=held_at_bounds(x0, lo, hi, y))
+        return self.certified(BoxQP(H, c, lo, hi), x0, y, (iterations, solves))
+
+    def certified(self, qp: BoxQP, x0, y, counts: tuple) -> BoxQPSolution:
+        """The QP ``qp`` by a certified solve from x0 with the held set guessed from x0 and OSQP's
+        duals y (or None), else by OSQP to ``EPS``; ``counts``: the OSQP iterations and solves so far."""
+        (H, c, lo, hi), (iterations, solves) = qp, counts
+        certified = solve_box(qp, x0, (EPS, EPS), guess=held_at_bounds(x0, lo, hi, y))
         if certified is not None:
             return BoxQPSolution(certified[0], np.zeros(len(c)), iterations, "solved", solves)
         res = self._osqp(H, c, lo, hi, x0, None, loose=False)

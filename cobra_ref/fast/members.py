@@ -4,7 +4,8 @@ For performance: the batched parts of a step (:mod:`cobra_ref.fast.newton_batch`
 :mod:`cobra_ref.fast.problem_batch`) concatenate the members' least-action rows (each member's
 3 m contact rows, then its servo rows) and contacts, so that an elementwise operation of the single
 member's code is one NumPy call for all of them; ``MemberRows`` says where each member's part lies,
-and ``segment_max`` takes a maximum per member.
+``segment_max`` takes a maximum per member, and ``Problems`` holds K least-action problems so
+concatenated.
 """
 
 from __future__ import annotations
@@ -12,6 +13,8 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+
+from ..compliance import STICK_SLIP_MAX, stick_slip_compliance
 
 
 class MemberRows(NamedTuple):
@@ -50,8 +53,8 @@ def member_rows(m: np.ndarray, n: np.ndarray) -> MemberRows:
     N = np.repeat(row0, m) + 3 * (np.arange(m.sum()) - np.repeat(contact0, m))
     servo = np.repeat(row0 + 3 * m, s) + np.arange(s.sum()) - np.repeat(servo0, s)
     member = np.arange(K)
-    return MemberRows(K, m, n, row0, contact0, servo0, np.repeat(member, n), np.repeat(member, m), np.repeat(member, s),
-                 N, N + 1, N + 2, servo)
+    return MemberRows(K, m, n, row0, contact0, servo0, np.repeat(member, n), np.repeat(member, m),
+                      np.repeat(member, s), N, N + 1, N + 2, servo)
 
 
 def segment_max(values: np.ndarray, member: np.ndarray, K: int) -> np.ndarray:
@@ -60,3 +63,38 @@ def segment_max(values: np.ndarray, member: np.ndarray, K: int) -> np.ndarray:
     out = np.zeros(K)
     np.maximum.at(out, member, values)
     return out
+
+
+class Problems:
+    """The K members' least-action problems, their data concatenated (``MemberRows``)."""
+
+    def __init__(self, problems):
+        self.problems = problems
+        self.rows = R = member_rows(np.array([p.m for p in problems]), np.array([len(p.c) for p in problems]))
+        self.c = np.concatenate([p.c for p in problems])
+        self.mu = np.concatenate([p.mu for p in problems])
+        self.lo = np.concatenate([p.lo for p in problems])
+        self.hi = np.concatenate([p.hi for p in problems])
+        H_diagonal = np.concatenate([p.H.diagonal() for p in problems])
+        self.G_TT = 0.5 * (H_diagonal[R.T1] + H_diagonal[R.T2])  # coulomb_newton._tangential_diagonal
+        self.R_max = STICK_SLIP_MAX * self.G_TT
+        self.H_diagonal = H_diagonal
+        self.v_s = [p.stiction_velocity for p in problems]
+        hi_max = segment_max(np.abs(self.hi), R.of_servo, R.K)[R.of_servo]
+        # the servo rows' tolerances at a bound: active_set's (floored) and _corrected's
+        self.hi_scale, self.hi_tol = 1e-9 * np.maximum(hi_max, 1e-300), 1e-9 * hi_max
+
+    def stick_slip(self, bound: np.ndarray) -> np.ndarray:
+        """``stick_slip_compliance`` of each contact's member (its own v_s) for the bounds ``bound``."""
+        if len(set(self.v_s)) == 1:
+            return stick_slip_compliance(self.v_s[0], bound, self.G_TT)
+        out, v_s = np.empty_like(bound), np.asarray(self.v_s)[self.rows.of_contact]
+        for value in set(self.v_s):
+            own = v_s == value
+            out[own] = stick_slip_compliance(value, bound[own], self.G_TT[own])
+        return out
+
+    def products(self, matrices, X: np.ndarray) -> np.ndarray:
+        """The members' matrix-vector products, matrices[k] @ X_k, concatenated."""
+        R = self.rows
+        return np.concatenate([A @ X[R.row_slice(k)] for k, A in enumerate(matrices)])

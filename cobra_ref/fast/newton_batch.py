@@ -23,10 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..compliance import STICK_SLIP_MAX, stick_slip_compliance
 from ..coulomb_newton import _SQRT_NEWTON_TOL, RELEASED, ActiveSet, _gesv, hessian, newton_answer, newton_rounds
 from ..least_action import chosen_guess
-from .members import member_rows, segment_max
+from .members import Problems, segment_max
 
 ROUNDS, STEPS = 4, 4  # coulomb_newton's rounds and Newton steps per round
 
@@ -34,7 +33,7 @@ ROUNDS, STEPS = 4, 4  # coulomb_newton's rounds and Newton steps per round
 def first_guesses(problems, starts) -> list:
     """``least_action.guess(problems[k], starts[k])`` for every member k (module docstring); every
     problem has at least one row."""
-    b = _Batch(problems)
+    b = Problems(problems)
     x = np.concatenate(starts)
     act, theta0 = _start(b, x)
     X, theta, failed = _newton_round(b, act, x, theta0)
@@ -59,42 +58,7 @@ def first_guesses(problems, starts) -> list:
     return out
 
 
-class _Batch:
-    """The K problems' data, concatenated (``members.MemberRows``)."""
-
-    def __init__(self, problems):
-        self.problems = problems
-        self.rows = R = member_rows(np.array([p.m for p in problems]), np.array([len(p.c) for p in problems]))
-        self.c = np.concatenate([p.c for p in problems])
-        self.mu = np.concatenate([p.mu for p in problems])
-        self.lo = np.concatenate([p.lo for p in problems])
-        self.hi = np.concatenate([p.hi for p in problems])
-        H_diagonal = np.concatenate([p.H.diagonal() for p in problems])
-        self.G_TT = 0.5 * (H_diagonal[R.T1] + H_diagonal[R.T2])  # coulomb_newton._tangential_diagonal
-        self.R_max = STICK_SLIP_MAX * self.G_TT
-        self.H_diagonal = H_diagonal
-        self.v_s = [p.stiction_velocity for p in problems]
-        hi_max = segment_max(np.abs(self.hi), R.of_servo, R.K)[R.of_servo]
-        # the servo rows' tolerances at a bound: active_set's (floored) and _corrected's
-        self.hi_scale, self.hi_tol = 1e-9 * np.maximum(hi_max, 1e-300), 1e-9 * hi_max
-
-    def stick_slip(self, bound: np.ndarray) -> np.ndarray:
-        """``stick_slip_compliance`` of each contact's member (its own v_s) for the bounds ``bound``."""
-        if len(set(self.v_s)) == 1:
-            return stick_slip_compliance(self.v_s[0], bound, self.G_TT)
-        out, v_s = np.empty_like(bound), np.asarray(self.v_s)[self.rows.of_contact]
-        for value in set(self.v_s):
-            own = v_s == value
-            out[own] = stick_slip_compliance(value, bound[own], self.G_TT[own])
-        return out
-
-    def products(self, matrices, X: np.ndarray) -> np.ndarray:
-        """The members' matrix-vector products, matrices[k] @ X_k, concatenated."""
-        R = self.rows
-        return np.concatenate([A @ X[R.row_slice(k)] for k, A in enumerate(matrices)])
-
-
-def _start(b: _Batch, x: np.ndarray):
+def _start(b: Problems, x: np.ndarray):
     """``coulomb_newton.newton_start`` of every member: (the active set, theta0), concatenated."""
     R = b.rows
     R_T = b.stick_slip(b.mu * np.maximum(x[R.N], 0.0))
@@ -112,7 +76,7 @@ def _start(b: _Batch, x: np.ndarray):
     return act, theta0
 
 
-def _residual(b: _Batch, X: np.ndarray) -> np.ndarray:
+def _residual(b: Problems, X: np.ndarray) -> np.ndarray:
     """``coulomb_newton.residual`` of every member at X with the stick-slip compliance of X's p_N."""
     R = b.rows
     r = b.products([p.H for p in b.problems], X) + b.c
@@ -122,7 +86,7 @@ def _residual(b: _Batch, X: np.ndarray) -> np.ndarray:
     return r
 
 
-def _corrected(b: _Batch, X, theta, act: ActiveSet, r) -> ActiveSet:
+def _corrected(b: Problems, X, theta, act: ActiveSet, r) -> ActiveSet:
     """``coulomb_newton._corrected`` of every member: the active set its Newton solution asks for."""
     R = b.rows
     p_N, p_T1, p_T2, r_N, r_T1, r_T2 = X[R.N], X[R.T1], X[R.T2], r[R.N], r[R.T1], r[R.T2]
@@ -142,7 +106,7 @@ def _corrected(b: _Batch, X, theta, act: ActiveSet, r) -> ActiveSet:
     return ActiveSet(released, sliding, at_lo, at_hi)
 
 
-def _newton_round(b: _Batch, act: ActiveSet, x: np.ndarray, theta0: np.ndarray):
+def _newton_round(b: Problems, act: ActiveSet, x: np.ndarray, theta0: np.ndarray):
     """(X, theta, failed (K,)): ``coulomb_newton``'s Newton iterations on the active set ``act`` from
     (x, theta0) for every member, each stopping where the single member's would."""
     system = _System(b, act)
@@ -171,7 +135,7 @@ class _System:
     """``coulomb_newton._NewtonSystem`` of every member for one active set: the members' matrices K
     side by side in one flat buffer (each (size, size), C order), their right-hand sides F likewise."""
 
-    def __init__(self, b: _Batch, act: ActiveSet):
+    def __init__(self, b: Problems, act: ActiveSet):
         R = b.rows
         self.b, self.act = b, act
         self.S = S = np.flatnonzero(act.sliding)  # the sliding contacts

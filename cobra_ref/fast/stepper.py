@@ -152,17 +152,18 @@ class FastStepper:
         rows.clock.append(time.perf_counter())
         return Prepared(system, x_start, rows.clock)
 
-    def finish(self, prepared: Prepared, first=None) -> StepResult:
+    def finish(self, prepared: Prepared, solved=None) -> StepResult:
         """Steps 6-7 of ``step`` from ``prepare``'s problem: the impulses, then the step's result.
-        ``first``: the friction loop's first guess from the start (``least_action.guess``), if the
-        batched step computed it."""
+        ``solved``: (x, info) of ``least_action.solve_least_action(problem, x_start, self.qp)``, if
+        the batched step solved it."""
         system, x_start, clock = prepared
         problem = system.problem
         # Step 6: eq. (6); where the certified solves leave the fixed point unconverged (their exact
         # active sets can send Newton's guess elsewhere than OSQP's answers do), the reference step's
         # loop, OSQP on every iterate, solves it again from the same start
-        self.qp.new_step()
-        x, info = solve_least_action(problem, x_start, self.qp, first=first)
+        if solved is None:
+            self.qp.new_step()
+        x, info = solve_least_action(problem, x_start, self.qp) if solved is None else solved
         if not info.converged:
             x, again = solve_least_action(problem, x_start)
             info = again._replace(iterations=info.iterations + again.iterations,

@@ -1,0 +1,202 @@
+"""The friction loop of K members at once: its first guess and its first iterate's vector work, batched.
+
+For performance: ``solve_all(problems, starts, qps)`` is ``[least_action.solve_least_action(p, x,
+qp) for ...]``, bit for bit, for the members of a batched step (:mod:`cobra_ref.fast.batch`), each
+with its own ``FastBoxQP`` (with ``new_step`` called); the friction loop mostly ends at its first
+iterate. Batched, for all members in one NumPy call each (per-member maxima as segment maxima,
+``members.segment_max``):
+
+* the first guess (:func:`cobra_ref.fast.newton_batch.first_guesses`);
+* the first iterate's vector work: the box's bounds, the tangent frames' turns of c and x, the
+  QP's start and OSQP's warm duals, the certified solve's held set and its certificate
+  (:mod:`cobra_ref.fast.active_set`), the natural residual and the friction's projection.
+
+Each member's own: its Hessian and the turned copy the QP reads, OSQP's loose solve on its own
+``FastBoxQP`` (whose OSQP instances it keeps warm), the Cholesky solve on its held set, the
+matrix-vector products. A member whose held set is not certified at once goes on with
+``FastBoxQP.certified``, one whose loop needs more iterates with ``least_action.fixed_point``
+from its second; an exception of a member's own part takes that member's place in the answer.
+Tested equal to ``solve_least_action`` member by member.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..coulomb_newton import RELEASED, hessian
+from ..least_action import FP_TOL, FixedPoint, LeastActionInfo, fixed_point, next_guess, project_disk, turn_tangents
+from ..qp import EPS, BoxQPSolution
+from .active_set import _posv
+from .least_action import GUESSES, BoxQP
+from .members import MemberRows, Problems, segment_max
+from .newton_batch import first_guesses
+
+
+def solve_all(problems, starts, qps) -> list:
+    """(x, info) of ``least_action.solve_least_action(problems[k], starts[k], qps[k])`` for every
+    member k, or the exception its solve raised (module docstring); every problem has rows."""
+    guesses = first_guesses(problems, starts)
+    b = Problems(problems)
+    R = b.rows
+    pbar_N, theta, x = (np.concatenate(part) for part in zip(*guesses))
+    R_T = b.stick_slip(b.mu * pbar_N)
+    Hs = [hessian(p, None, R_T[R.contact_slice(k)]) for k, p in enumerate(problems)]
+    lo, hi = _bounds(b, pbar_N)
+    turned = [turn_tangents(H, guess[1], p.m) for H, guess, p in zip(Hs, guesses, problems)]
+    solutions = _first_qps(b, turned, _turn(R, b.c, theta), lo, hi, _turn(R, x, theta), qps)
+    ok = [k for k, sol in enumerate(solutions) if not isinstance(sol, Exception)]
+    x = _turn(R, np.concatenate([solutions[k].x if k in ok else np.zeros(R.n[k]) for k in range(R.K)]), -theta)
+    residual = _natural_residuals(b, x, b.products(Hs, x) + b.c, R_T, pbar_N)
+    projected = _projected(b, x)
+    out = list(solutions)
+    for k in ok:
+        problem, sol, rows, contacts = problems[k], solutions[k], R.row_slice(k), R.contact_slice(k)
+        if residual[k] <= FP_TOL:
+            out[k] = projected[rows], LeastActionInfo(True, 1, sol.iterations, sol.solves, float(residual[k]),
+                                                      sol.status)
+            continue
+        try:  # the single member's loop from its second iterate
+            start = FixedPoint(2, *next_guess(problem, x[rows], pbar_N[contacts], theta[contacts], 1),
+                               sol.iterations, sol.solves)
+            out[k] = fixed_point(problem, start, qps[k])
+        except Exception as exc:
+            out[k] = exc
+    return out
+
+
+def _bounds(b: Problems, pbar_N: np.ndarray):
+    """(lo, hi) of every member's first iterate: ``least_action.bounds``."""
+    R, radius = b.rows, b.mu * pbar_N
+    lo, hi = np.zeros(len(b.c)), np.full(len(b.c), np.inf)
+    lo[R.T1] = lo[R.T2] = -radius
+    hi[R.T1] = hi[R.T2] = radius
+    lo[R.servo], hi[R.servo] = b.lo, b.hi
+    return lo, hi
+
+
+def _turn(R: MemberRows, v: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """``least_action.turn`` of every member's rows of v by its contacts' angles theta."""
+    out = v.copy()
+    c, s = np.cos(theta), np.sin(theta)
+    t1, t2 = v[R.T1], v[R.T2]
+    out[R.T1], out[R.T2] = c * t1 + s * t2, -s * t1 + c * t2
+    return out
+
+
+def _held(R: MemberRows, x, lo, hi, y=None, has_y=None):
+    """``active_set.held_at_bounds`` of every member (its own tolerance); y: OSQP's duals where
+    ``has_y`` (the rows of the members whose OSQP answer guesses the set)."""
+    tol = 1e-12 * np.maximum(segment_max(np.abs(x), R.of_row, R.K), 1e-300)[R.of_row]
+    at_hi = x >= hi - tol
+    at_lo = (x <= lo + tol) & ~at_hi
+    if y is not None:
+        at_hi |= has_y & (y > 0)
+        at_lo = (at_lo | (has_y & (y < 0))) & ~at_hi
+    return at_lo & np.isfinite(lo), at_hi & np.isfinite(hi)
+
+
+def _first_qps(b: Problems, Hs, c, lo, hi, x0, qps) -> list:
+    """Each member's ``FastBoxQP.__call__(H, c, lo, hi, x0)`` as the first QP of its step: OSQP's
+    loose solve, then the certified solve on the held set it guesses (or the member's own rest)."""
+    R = b.rows
+    x0 = np.clip(x0, lo, hi)
+    at_lo, at_hi = _held(R, x0, lo, hi)
+    y0 = np.where(at_lo | at_hi, -(b.products(Hs, x0) + c), 0.0)
+    starts, duals, counts, failed = [], [], [], {}
+    for k, qp in enumerate(qps):
+        rows = R.row_slice(k)
+        qp.first = False
+        try:
+            res = qp._osqp(Hs[k], c[rows], lo[rows], hi[rows], x0[rows], y0[rows], loose=True)
+        except Exception as exc:
+            failed[k], res = exc, None
+        guessed = res is not None and res.info.status in GUESSES
+        starts.append(res.x if guessed else x0[rows])
+        duals.append(res.y if guessed else None)
+        counts.append((res.info.iter, 1) if res is not None else (0, 1))
+    x0 = np.concatenate(starts)
+    has_y = np.repeat([y is not None for y in duals], R.n)
+    y = np.concatenate([np.zeros(R.n[k]) if d is None else d for k, d in enumerate(duals)])
+    x, certified = _held_solve(b, Hs, c, lo, hi, _held(R, x0, lo, hi, y, has_y))
+    out = []
+    for k, qp in enumerate(qps):
+        rows = R.row_slice(k)
+        if k in failed:
+            out.append(failed[k])
+            continue
+        if certified[k]:
+            out.append(BoxQPSolution(x[rows], np.zeros(R.n[k]), counts[k][0], "solved", counts[k][1]))
+            continue
+        try:
+            out.append(qp.certified(BoxQP(Hs[k], c[rows], lo[rows], hi[rows]), starts[k], duals[k], counts[k]))
+        except Exception as exc:
+            out.append(exc)
+    return out
+
+
+def _held_solve(b: Problems, Hs, c, lo, hi, held):
+    """(x, certified (K,)): ``active_set.solve_box``'s first round on the guessed held set ``held`` =
+    (at_lo, at_hi) of every member, and whether its certificate accepts each member's answer."""
+    R, fixed = b.rows, lo == hi
+    at_hi = held[1] & ~fixed
+    at_lo = (held[0] | fixed) & ~at_hi
+    x = np.where(at_hi, hi, lo)
+    free = ~(at_lo | at_hi)
+    solved = np.ones(R.K, dtype=bool)
+    for k, H in enumerate(Hs):
+        rows = R.row_slice(k)
+        x_k, F = x[rows], free[rows].nonzero()[0]
+        if len(F):
+            x_k[F] = 0.0
+            # H_FF x_F = -(c_F + H_FW x_W): LAPACK's Cholesky solve (posv)
+            H_F = H.take(F, 0)
+            _, x_F, info = _posv(H_F.take(F, 1), -(c[rows].take(F) + H_F @ x_k), lower=True)
+            solved[k] = info == 0
+            x_k[F] = x_F
+    r = b.products(Hs, x) + c
+    return x, solved & _certificates(R, x, (at_lo, at_hi, fixed, free), r, c, (lo, hi))
+
+
+def _certificates(R: MemberRows, x, held, r, c, box) -> np.ndarray:
+    """(K,) ``active_set._certified`` of every member at OSQP's tolerances (EPS, EPS); held =
+    (at_lo, at_hi, fixed, free), box = (lo, hi)."""
+    (at_lo, at_hi, fixed, free), (lo, hi) = held, box
+    member, K = R.of_row, R.K
+    abs_g = np.abs(r)
+    tol_p = EPS + EPS * segment_max(np.abs(x), member, K)
+    tol_d = EPS + EPS * segment_max(abs_g * ~free, member, K)
+    # held variables sit on a bound, so the largest violation over all variables is the free ones'
+    primal = ~(segment_max(np.maximum(lo - x, x - hi), member, K) > tol_p)
+    sign = at_hi.astype(float) - (at_lo & ~fixed)
+    dual = ~(segment_max(r * sign, member, K) > tol_d)
+    scale = np.maximum(segment_max(np.abs(r - c), member, K), segment_max(np.abs(c), member, K))
+    finite = np.ones(K, dtype=bool)
+    np.logical_and.at(finite, member, np.isfinite(x))
+    return primal & dual & finite & (segment_max(abs_g * free, member, K) <= EPS + EPS * scale)
+
+
+def _natural_residuals(b: Problems, x, r, R_T, pbar_N) -> np.ndarray:
+    """(K,) ``least_action.natural_residual`` of every member's impulses x with residual r (from its
+    Hessian with the stick-slip compliance R_T) against its guess pbar_N, over its impulse floor."""
+    R = b.rows
+    a = 0.5 * ((b.H_diagonal[R.T1] + R_T) + (b.H_diagonal[R.T2] + R_T))  # the tangential diagonal of H
+    p_N, p_T1, p_T2 = x[R.N], x[R.T1], x[R.T2]
+    z = np.stack([p_T1 - r[R.T1] / a, p_T2 - r[R.T2] / a], axis=1)
+    # least_action.impulse_floor
+    floor = RELEASED * segment_max(np.abs(b.c[R.N]) / b.H_diagonal[R.N], R.of_contact, R.K)
+    scale = np.maximum(np.maximum(segment_max(p_N, R.of_contact, R.K), floor), 1e-300)
+    normal = segment_max(np.abs(p_N - pbar_N), R.of_contact, R.K)
+    projected = project_disk(z, b.mu * np.maximum(p_N, 0.0))
+    friction = segment_max(np.hypot(p_T1 - projected[:, 0], p_T2 - projected[:, 1]), R.of_contact, R.K)
+    return np.where(friction > normal, friction, normal) / scale  # max(normal, friction), as Python takes it
+
+
+def _projected(b: Problems, x: np.ndarray) -> np.ndarray:
+    """``least_action.project_friction`` of every member's impulses x."""
+    R, x = b.rows, x.copy()
+    p_N = x[R.N]
+    p_N = np.where(p_N > RELEASED * segment_max(p_N, R.of_contact, R.K)[R.of_contact], p_N, 0.0)
+    x[R.N] = p_N
+    p_T = project_disk(np.stack([x[R.T1], x[R.T2]], axis=1), b.mu * p_N)
+    x[R.T1], x[R.T2] = p_T[:, 0], p_T[:, 1]
+    return x
