@@ -198,13 +198,13 @@ def step(model: Model, q, qd, t: float, reference, settings: StepSettings = Step
 
 
 def step_result(model: Model, system: StepSystem, x: np.ndarray, info: LeastActionInfo, settings: StepSettings,
-                integrate_step) -> StepResult:
+                integrate_step, residuals: dict | None = None) -> StepResult:
     """Step 7 of a step (module docstring) from the impulses x of its ``system``: the one place a
     ``StepResult`` is built, by both steppers.
 
     Implements: [COBRA] eq. (1) with the impulses, qd+ = qd_free + M_FF^-1 J^T x, the joint torques
     (``StepSettings.joint_servo``), the energy ledger (``energies``) and q+ =
-    ``integrate_step(q, qd+)``.
+    ``integrate_step(q, qd+)``. ``residuals``: ``kkt_residuals(system.problem, x)`` if computed already.
     """
     s, m, dt = system, system.contacts.m, settings.dt
     qd_next = s.qd_free.copy()
@@ -216,7 +216,8 @@ def step_result(model: Model, system: StepSystem, x: np.ndarray, info: LeastActi
 
     tau = settings.joint_servo.torque(x[3 * m:], dt, recovered)
     return StepResult(q=integrate_step(s.q, qd_next), qd=qd_next, tau=tau, contacts=s.contacts, p=p,
-                      w=s.J_c @ qd_next, info=info, residuals=kkt_residuals(s.problem, x),
+                      w=s.J_c @ qd_next, info=info,
+                      residuals=kkt_residuals(s.problem, x) if residuals is None else residuals,
                       approach=approach_speed(s.J_c, s.qd), G_NN=s.G.diagonal()[:3 * m:3],
                       **energies(model, s, qd_next, p, tau, settings), q_ref=s.q_ref,
                       memory=warm_start_memory(s.contacts, x, s.qd))

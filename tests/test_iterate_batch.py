@@ -7,7 +7,7 @@ from cobra_ref.fast import iterate_batch
 from cobra_ref.fast.active_set import BoxQP, box_certificate, held_at_bounds, solve_box
 from cobra_ref.fast.least_action import FastBoxQP
 from cobra_ref.fast.members import member_rows
-from cobra_ref.least_action import solve_least_action
+from cobra_ref.least_action import kkt_residuals, solve_least_action
 from cobra_ref.qp import EPS
 
 
@@ -156,3 +156,16 @@ def test_the_batched_held_set_is_each_members_own(rng):
             own = None if duals is None or not has_y[rows][0] else duals[rows]
             for a, b in zip(got, held_at_bounds(x[rows], lo[rows], hi[rows], own)):
                 np.testing.assert_array_equal(a[rows], b)
+
+
+@pytest.mark.parametrize("K", [1, 16])
+def test_each_members_kkt_residuals_are_its_own(least_action_steps, K):
+    """The KKT residuals of each member's solved impulses (and of its warm start, a point that is not
+    a solution) equal ``least_action.kkt_residuals``, value for value."""
+    order = np.random.default_rng(K).permutation(len(least_action_steps))[:160]
+    for i in range(0, len(order), K):
+        batch = [least_action_steps[j] for j in order[i:i + K]]
+        solved = [x for x, _ in _solved_together(batch)]
+        for xs in (solved, [x for _, x in batch]):
+            for (problem, _), x, got in zip(batch, xs, iterate_batch.kkt_all([p for p, _ in batch], xs)):
+                assert got == kkt_residuals(problem, x)

@@ -11,7 +11,8 @@ each:
   ``contact_jacobian_batch``);
 * from ``BATCHED_FROM`` members on, the rows of the least-action problems
   (:func:`cobra_ref.fast.problem_batch.least_action_problems`) and the vector work of the friction
-  loop's first guess and first iterate (:func:`cobra_ref.fast.iterate_batch.solve_all`).
+  loop's first guess and first iterate (:func:`cobra_ref.fast.iterate_batch.solve_all`), and the
+  KKT residuals of the impulses (``iterate_batch.kkt_all``).
 
 The rest of each member's step (its free velocity and G, its OSQP and LAPACK solves, the result) is
 its own :class:`cobra_ref.fast.stepper.FastStepper`'s (``rows``, ``posed``, ``finish``), given
@@ -29,7 +30,7 @@ from ..model import Model
 from ..step import StepSettings, midpoint_velocity
 from .chain import ChainTerms
 from .contacts import contact_jacobian_batch, find_contacts_batch
-from .iterate_batch import solve_all
+from .iterate_batch import kkt_all, solve_all
 from .problem_batch import least_action_problems
 from .stepper import FastStepper
 
@@ -85,8 +86,9 @@ class BatchStepper:
                 for j, k in enumerate(active)]
         prepared = self._posed(rows, active)
         solved = self._solved(prepared, active)
-        return [p if isinstance(p, Exception) else s if isinstance(s, Exception) else self._member(k, "finish", p, s)
-                for k, p, s in zip(active, prepared, solved)]
+        residuals = self._residuals(prepared, solved)
+        return [p if isinstance(p, Exception) else s if isinstance(s, Exception) else
+                self._member(k, "finish", p, s, kkt) for k, p, s, kkt in zip(active, prepared, solved, residuals)]
 
     def _member(self, k: int, phase: str, *args):
         """Member k's ``FastStepper.prepare`` or ``finish`` on ``args``, or the exception it raised
@@ -134,3 +136,15 @@ class BatchStepper:
             solved[j] = answer
         self.batched_seconds += time.perf_counter() - start
         return solved
+
+    def _residuals(self, prepared, solved) -> list:
+        """``least_action.kkt_residuals`` of each member's converged impulses, batched
+        (``iterate_batch.kkt_all``); None for the others (their own ``finish`` computes them)."""
+        start = time.perf_counter()
+        done = [j for j, s in enumerate(solved) if isinstance(s, tuple) and s[1].converged]
+        residuals = [None] * len(solved)
+        if done:
+            for j, kkt in zip(done, kkt_all([prepared[j].system.problem for j in done], [solved[j][0] for j in done])):
+                residuals[j] = kkt
+        self.batched_seconds += time.perf_counter() - start
+        return residuals

@@ -46,7 +46,8 @@ def solve_all(problems, starts, qps) -> list:
     solutions = _first_qps(b, turned, _turn(R, b.c, theta), lo, hi, _turn(R, x, theta), qps)
     ok = [k for k, sol in enumerate(solutions) if not isinstance(sol, Exception)]
     x = _turn(R, np.concatenate([solutions[k].x if k in ok else np.zeros(R.n[k]) for k in range(R.K)]), -theta)
-    residual = _natural_residuals(b, x, b.products(Hs, x) + b.c, R_T, pbar_N)
+    p_N, p_T, z = _split(b, x, b.products(Hs, x) + b.c, R_T)
+    residual = _natural_residuals(b, p_N, p_T, z, pbar_N)
     projected = _projected(b, x)
     out = list(solutions)
     for k in ok:
@@ -175,19 +176,43 @@ def _certificates(R: MemberRows, x, held, r, c, box) -> np.ndarray:
     return primal & dual & finite & (segment_max(abs_g * free, member, K) <= EPS + EPS * scale)
 
 
-def _natural_residuals(b: Problems, x, r, R_T, pbar_N) -> np.ndarray:
-    """(K,) ``least_action.natural_residual`` of every member's impulses x with residual r (from its
-    Hessian with the stick-slip compliance R_T) against its guess pbar_N, over its impulse floor."""
+def kkt_all(problems, xs) -> list:
+    """``least_action.kkt_residuals(problems[k], xs[k])`` for every member k, batched as above."""
+    b = Problems(problems)
+    R = b.rows
+    x = np.concatenate(xs)
+    p_N = np.maximum(x[R.N], 0.0)
+    R_T = b.stick_slip(b.mu * p_N)
+    r = b.products([hessian(p, None, R_T[R.contact_slice(k)]) for k, p in enumerate(problems)], x) + b.c
+    _, p_T, z = _split(b, x, r, R_T)
+    scale = np.maximum(segment_max(p_N, R.of_contact, R.K), 1e-300)
+    cone = segment_max(np.maximum(np.hypot(p_T[:, 0], p_T[:, 1]) - b.mu * p_N, 0.0), R.of_contact, R.K) / scale
+    complementarity = segment_max(np.abs(p_N * r[R.N]), R.of_contact, R.K)
+    coulomb = _natural_residuals(b, p_N, p_T, z, p_N)
+    zero = {"complementarity": 0.0, "cone_residual": 0.0, "coulomb_residual": 0.0}
+    return [{"complementarity": float(complementarity[k]), "cone_residual": float(cone[k]),
+             "coulomb_residual": float(coulomb[k])} if R.m[k] else dict(zero) for k in range(R.K)]
+
+
+def _split(b: Problems, x, r, R_T):
+    """``coulomb_newton.coulomb_split`` of every member's impulses x with residual r, from its Hessian
+    with the stick-slip compliance R_T: (p_N, p_T (m, 2), z (m, 2)) concatenated."""
     R = b.rows
     a = 0.5 * ((b.H_diagonal[R.T1] + R_T) + (b.H_diagonal[R.T2] + R_T))  # the tangential diagonal of H
-    p_N, p_T1, p_T2 = x[R.N], x[R.T1], x[R.T2]
-    z = np.stack([p_T1 - r[R.T1] / a, p_T2 - r[R.T2] / a], axis=1)
+    p_T = np.stack([x[R.T1], x[R.T2]], axis=1)
+    return x[R.N], p_T, np.stack([p_T[:, 0] - r[R.T1] / a, p_T[:, 1] - r[R.T2] / a], axis=1)
+
+
+def _natural_residuals(b: Problems, p_N, p_T, z, pbar_N) -> np.ndarray:
+    """(K,) ``least_action.natural_residual`` of every member's impulses (p_N, p_T) and z
+    (``_split``) against its guess pbar_N, over its impulse floor."""
+    R = b.rows
     # least_action.impulse_floor
     floor = RELEASED * segment_max(np.abs(b.c[R.N]) / b.H_diagonal[R.N], R.of_contact, R.K)
     scale = np.maximum(np.maximum(segment_max(p_N, R.of_contact, R.K), floor), 1e-300)
     normal = segment_max(np.abs(p_N - pbar_N), R.of_contact, R.K)
-    projected = project_disk(z, b.mu * np.maximum(p_N, 0.0))
-    friction = segment_max(np.hypot(p_T1 - projected[:, 0], p_T2 - projected[:, 1]), R.of_contact, R.K)
+    off = p_T - project_disk(z, b.mu * np.maximum(p_N, 0.0))
+    friction = segment_max(np.hypot(off[:, 0], off[:, 1]), R.of_contact, R.K)
     return np.where(friction > normal, friction, normal) / scale  # max(normal, friction), as Python takes it
 
 

@@ -152,10 +152,11 @@ class FastStepper:
         rows.clock.append(time.perf_counter())
         return Prepared(system, x_start, rows.clock)
 
-    def finish(self, prepared: Prepared, solved=None) -> StepResult:
+    def finish(self, prepared: Prepared, solved=None, residuals=None) -> StepResult:
         """Steps 6-7 of ``step`` from ``prepare``'s problem: the impulses, then the step's result.
-        ``solved``: (x, info) of ``least_action.solve_least_action(problem, x_start, self.qp)``, if
-        the batched step solved it."""
+        ``solved``: (x, info) of ``least_action.solve_least_action(problem, x_start, self.qp)``, and
+        ``residuals``: ``least_action.kkt_residuals(problem, x)`` of a converged x, if the batched
+        step computed them."""
         system, x_start, clock = prepared
         problem = system.problem
         # Step 6: eq. (6); where the certified solves leave the fixed point unconverged (their exact
@@ -165,13 +166,14 @@ class FastStepper:
             self.qp.new_step()
         x, info = solve_least_action(problem, x_start, self.qp) if solved is None else solved
         if not info.converged:
+            residuals = None  # of the x solved again below, not of the one given
             x, again = solve_least_action(problem, x_start)
             info = again._replace(iterations=info.iterations + again.iterations,
                                   qp_iterations=info.qp_iterations + again.qp_iterations,
                                   qp_solves=info.qp_solves + again.qp_solves)
         clock.append(time.perf_counter())
         # Step 7: velocity, torques, energy ledger, position (the reference step's step_result)
-        result = step_result(self.model, system, x, info, self.settings, self._integrate)
+        result = step_result(self.model, system, x, info, self.settings, self._integrate, residuals)
         self.memory = result.memory
         clock.append(time.perf_counter())
         for phase, t0, t1 in zip(PHASES, clock[:-1], clock[1:]):
