@@ -35,8 +35,8 @@ from .newton_batch import first_guesses
 def solve_all(problems, starts, qps) -> list:
     """(x, info) of ``least_action.solve_least_action(problems[k], starts[k], qps[k])`` for every
     member k, or the exception its solve raised (module docstring); every problem has rows."""
-    guesses = first_guesses(problems, starts)
     b = Problems(problems)
+    guesses = first_guesses(problems, starts, b)
     R = b.rows
     pbar_N, theta, x = (np.concatenate(part) for part in zip(*guesses))
     R_T = b.stick_slip(b.mu * pbar_N)

@@ -30,10 +30,10 @@ from .members import Problems, segment_max
 ROUNDS, STEPS = 4, 4  # coulomb_newton's rounds and Newton steps per round
 
 
-def first_guesses(problems, starts) -> list:
+def first_guesses(problems, starts, b: Problems | None = None) -> list:
     """``least_action.guess(problems[k], starts[k])`` for every member k (module docstring); every
-    problem has at least one row."""
-    b = Problems(problems)
+    problem has at least one row. ``b``: ``Problems(problems)``, if made already."""
+    b = Problems(problems) if b is None else b
     x = np.concatenate(starts)
     act, theta0 = _start(b, x)
     X, theta, failed = _newton_round(b, act, x, theta0)
