@@ -34,8 +34,8 @@ from .iterate_batch import kkt_all, solve_all
 from .problem_batch import least_action_problems
 from .stepper import FastStepper
 
-# the fewest members whose least-action problems and first guesses are batched: for one or two,
-# each member's own are faster than the batched parts' set-up
+# the fewest members whose least-action problems, friction loops and KKT residuals are batched: for
+# one or two, each member's own step is faster than the batched parts' set-up
 BATCHED_FROM = 3
 
 
@@ -78,7 +78,7 @@ class BatchStepper:
         J_c = contact_jacobian_batch(self.chain, terms.S, contacts)
         self.batched_seconds += time.perf_counter() - start
         own_terms = [ChainTerms(*(part[j] for part in terms)) for j in range(len(active))]
-        if len(active) < BATCHED_FROM:  # each member's own problem and guess are faster
+        if len(active) < BATCHED_FROM:  # each member's own step is faster
             prepared = [self._member(k, "prepare", Q[k], QD[k], t, references[k], None, own_terms[j], contacts[j],
                                      J_c[j]) for j, k in enumerate(active)]
             return [p if isinstance(p, Exception) else self._member(k, "finish", p) for k, p in zip(active, prepared)]
@@ -91,8 +91,8 @@ class BatchStepper:
                 self._member(k, "finish", p, s, kkt) for k, p, s, kkt in zip(active, prepared, solved, residuals)]
 
     def _member(self, k: int, phase: str, *args):
-        """Member k's ``FastStepper.prepare`` or ``finish`` on ``args``, or the exception it raised
-        (that member fails; the others go on)."""
+        """Member k's ``FastStepper`` method ``phase`` (``prepare``, ``rows``, ``pose``, ``posed``,
+        ``finish``) on ``args``, or the exception it raised (that member fails; the others go on)."""
         try:
             return getattr(self.members[k], phase)(*args)
         except KeyboardInterrupt:
