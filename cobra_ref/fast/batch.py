@@ -91,8 +91,8 @@ class BatchStepper:
                 self._member(k, "finish", p, s, kkt) for k, p, s, kkt in zip(active, prepared, solved, residuals)]
 
     def _member(self, k: int, phase: str, *args):
-        """Member k's ``FastStepper`` method ``phase`` (``prepare``, ``rows``, ``pose``, ``posed``,
-        ``finish``) on ``args``, or the exception it raised (that member fails; the others go on)."""
+        """Member k's ``FastStepper`` method ``phase`` (``prepare``, ``rows``, ``posed``, ``finish``)
+        on ``args``, or the exception it raised (that member fails; the others go on)."""
         try:
             return getattr(self.members[k], phase)(*args)
         except KeyboardInterrupt:
@@ -107,16 +107,12 @@ class BatchStepper:
         ready = [j for j, r in enumerate(rows) if not isinstance(r, Exception)]
         if not ready:
             return rows
-        try:
-            problems = least_action_problems([self.members[active[j]].model for j in ready],
-                                             [(rows[j].system.G, rows[j].problem_args) for j in ready])
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError):
-            problems = None  # a member's data the batched arithmetic cannot take: each writes its own
+        problems = least_action_problems([self.members[active[j]].model for j in ready],
+                                         [(rows[j].system.G, rows[j].problem_args) for j in ready])
         self.batched_seconds += time.perf_counter() - start
         prepared = list(rows)
-        for i, j in enumerate(ready):
-            prepared[j] = (self._member(active[j], "pose", rows[j]) if problems is None else
-                           self._member(active[j], "posed", rows[j], problems[i]))
+        for j, problem in zip(ready, problems):
+            prepared[j] = self._member(active[j], "posed", rows[j], problem)
         return prepared
 
     def _solved(self, prepared, active) -> list:

@@ -44,13 +44,13 @@ def solve_all(problems, starts, qps) -> list:
     lo, hi = _bounds(b, pbar_N)
     turned = [turn_tangents(H, guess[1], p.m) for H, guess, p in zip(Hs, guesses, problems)]
     solutions = _first_qps(b, turned, _turn(R, b.c, theta), lo, hi, _turn(R, x, theta), qps)
-    ok = [k for k, sol in enumerate(solutions) if not isinstance(sol, Exception)]
+    ok = {k for k, sol in enumerate(solutions) if not isinstance(sol, Exception)}
     x = _turn(R, np.concatenate([solutions[k].x if k in ok else np.zeros(R.n[k]) for k in range(R.K)]), -theta)
     p_N, p_T, z = _split(b, x, b.products(Hs, x) + b.c, R_T)
     residual = _natural_residuals(b, p_N, p_T, z, pbar_N)
     projected = _projected(b, x)
     out = list(solutions)
-    for k in ok:
+    for k in sorted(ok):
         problem, sol, rows, contacts = problems[k], solutions[k], R.row_slice(k), R.contact_slice(k)
         if residual[k] <= FP_TOL:
             out[k] = projected[rows], LeastActionInfo(True, 1, sol.iterations, sol.solves, float(residual[k]),

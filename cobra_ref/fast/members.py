@@ -1,7 +1,7 @@
 """Where K members of a batched step lie when their rows and contacts are concatenated.
 
-For performance: the batched parts of a step (:mod:`cobra_ref.fast.newton_batch`,
-:mod:`cobra_ref.fast.problem_batch`) concatenate the members' least-action rows (each member's
+For performance: the batched parts of a step (:mod:`cobra_ref.fast.problem_batch`,
+:mod:`cobra_ref.fast.newton_batch`, :mod:`cobra_ref.fast.iterate_batch`) concatenate the members' least-action rows (each member's
 3 m contact rows, then its servo rows) and contacts, so that an elementwise operation of the single
 member's code is one NumPy call for all of them; ``MemberRows`` says where each member's part lies,
 ``segment_max`` takes a maximum per member, and ``Problems`` holds K least-action problems so
@@ -40,10 +40,14 @@ class MemberRows(NamedTuple):
     def contact_slice(self, k: int) -> slice:
         return slice(self.contact0[k], self.contact0[k] + self.m[k])
 
+    def servo_slice(self, k: int) -> slice:
+        """Member k's servo rows, among the servo rows."""
+        return slice(self.servo0[k], self.servo0[k] + self.n[k] - 3 * self.m[k])
+
     def slices(self, k: int) -> tuple:
         """Member k's slices of an ``ActiveSet``'s four masks."""
-        servo = slice(self.servo0[k], self.servo0[k] + self.n[k] - 3 * self.m[k])
-        return self.contact_slice(k), self.contact_slice(k), servo, servo
+        contacts, servo = self.contact_slice(k), self.servo_slice(k)
+        return contacts, contacts, servo, servo
 
 
 def member_rows(m: np.ndarray, n: np.ndarray) -> MemberRows:
@@ -80,16 +84,17 @@ class Problems:
         self.R_max = STICK_SLIP_MAX * self.G_TT
         self.H_diagonal = H_diagonal
         self.v_s = [p.stiction_velocity for p in problems]
+        self.v_s_values = set(self.v_s)
         hi_max = segment_max(np.abs(self.hi), R.of_servo, R.K)[R.of_servo]
         # the servo rows' tolerances at a bound: active_set's (floored) and _corrected's
         self.hi_scale, self.hi_tol = 1e-9 * np.maximum(hi_max, 1e-300), 1e-9 * hi_max
 
     def stick_slip(self, bound: np.ndarray) -> np.ndarray:
         """``stick_slip_compliance`` of each contact's member (its own v_s) for the bounds ``bound``."""
-        if len(set(self.v_s)) == 1:
+        if len(self.v_s_values) == 1:
             return stick_slip_compliance(self.v_s[0], bound, self.G_TT)
         out, v_s = np.empty_like(bound), np.asarray(self.v_s)[self.rows.of_contact]
-        for value in set(self.v_s):
+        for value in self.v_s_values:
             own = v_s == value
             out[own] = stick_slip_compliance(value, bound[own], self.G_TT[own])
         return out

@@ -137,17 +137,17 @@ class _System:
 
     def __init__(self, b: Problems, act: ActiveSet):
         R = b.rows
-        self.b, self.act = b, act
+        self.b = b
         self.S = S = np.flatnonzero(act.sliding)  # the sliding contacts
         self.S_member = R.of_contact[S]
-        size = R.n + np.bincount(self.S_member, minlength=R.K)
+        sliding = np.bincount(self.S_member, minlength=R.K)  # per member
+        size = R.n + sliding
         K0, F0 = np.cumsum(size**2) - size**2, np.cumsum(size) - size
         self.F_member = np.repeat(np.arange(R.K), size)
         self.F_bounds = np.stack([F0, F0 + size], axis=1)
         local = np.arange(len(R.of_row)) - R.row0[R.of_row]  # each row's index within its member
         self.F_row = F0[R.of_row] + local  # each row's entry of F
-        rank = np.arange(len(S)) - (np.cumsum(np.bincount(self.S_member, minlength=R.K)) -
-                                   np.bincount(self.S_member, minlength=R.K))[self.S_member]
+        rank = np.arange(len(S)) - (np.cumsum(sliding) - sliding)[self.S_member]
         D = R.n[self.S_member] + rank  # each sliding contact's angle row, within its member
         self.F_D = F0[self.S_member] + D
 

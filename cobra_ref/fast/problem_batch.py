@@ -54,7 +54,7 @@ def least_action_problems(models, parts) -> list:
     c = np.concatenate(c_free) + rows_b
     v_s = law.stiction_velocity(model)
     return [LeastAction(G + np.diag(rows_R[R.row_slice(k)]), c[R.row_slice(k)], mu[R.contact_slice(k)],
-                        lo[R.slices(k)[2]], hi[R.slices(k)[2]], v_s) for k, G in enumerate(Gs)]
+                        lo[R.servo_slice(k)], hi[R.servo_slice(k)], v_s) for k, G in enumerate(Gs)]
 
 
 def _joined(starts) -> ServoStart:
