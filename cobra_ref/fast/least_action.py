@@ -23,7 +23,7 @@ import numpy as np
 import osqp
 from scipy import sparse
 
-from ..qp import EPS, MAX_ITER, BoxQPSolution, ContactSolveError
+from ..qp import EPS, MAX_ITER, BoxQPSolution, ContactSolveError, osqp_solve
 from .active_set import BoxQP, held_at_bounds, solve_box
 
 LOOSE_EPS = 1e-5  # the first OSQP solve of a step: only a guess of the active set
@@ -99,5 +99,4 @@ class FastBoxQP:
         else:
             solver = self._solvers[key]
             solver.update(Px=H.take(self._upper[n]), q=c, l=lo, u=hi)
-        solver.warm_start(x=x0, y=np.zeros(n) if y0 is None else y0)
-        return solver.solve(raise_error=False)
+        return osqp_solve(solver, x0, np.zeros(n) if y0 is None else y0)
