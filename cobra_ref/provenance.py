@@ -24,7 +24,7 @@ PHYSICS_MODULES = (
     "trajectory.py",
     "fast/chain.py", "fast/contacts.py", "fast/gaps.py", "fast/least_action.py", "fast/active_set.py",
     "fast/stepper.py", "batch.py", "fast/batch.py", "fast/members.py", "fast/newton_batch.py",
-    "fast/problem_batch.py", "fast/iterate_batch.py",
+    "fast/problem_batch.py", "fast/iterate_batch.py", "fast/box_batch.py",
 )
 # ... and the optimizer's cost and rollout
 PLANNING_MODULES = ("planning/cost.py", "planning/problem.py")

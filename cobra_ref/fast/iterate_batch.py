@@ -8,12 +8,13 @@ iterate. Batched, for all members in one NumPy call each (per-member maxima as s
 
 * the first guess (:func:`cobra_ref.fast.newton_batch.first_guesses`);
 * the first iterate's vector work: the box's bounds, the tangent frames' turns of c and x, the
-  QP's start and OSQP's warm duals, the certified solve's held set and its certificate
-  (:mod:`cobra_ref.fast.active_set`), the natural residual and the friction's projection.
+  QP's start and OSQP's warm duals, the certified solve's held set, its active-set rounds and
+  its certificate (:mod:`cobra_ref.fast.box_batch`), the natural residual and the friction's
+  projection.
 
 Each member's own: its Hessian and the turned copy the QP reads, OSQP's loose solve on its own
-``FastBoxQP`` (whose OSQP instances it keeps warm), the Cholesky solve on its held set, the
-matrix-vector products. A member whose held set is not certified at once goes on with
+``FastBoxQP`` (whose OSQP instances it keeps warm), the Cholesky solves on its held sets, the
+matrix-vector products. A member whose box QP the full rounds leave uncertified goes on with
 ``FastBoxQP.certified``, one whose loop needs more iterates with ``least_action.fixed_point``
 from its second; an exception of a member's own part takes that member's place in the answer.
 Tested equal to ``solve_least_action`` member by member.
@@ -25,8 +26,8 @@ import numpy as np
 
 from ..coulomb_newton import RELEASED, hessian
 from ..least_action import FP_TOL, FixedPoint, LeastActionInfo, fixed_point, next_guess, project_disk, turn_tangents
-from ..qp import EPS, BoxQPSolution
-from .active_set import _posv
+from ..qp import BoxQPSolution
+from .box_batch import held, solve_boxes
 from .least_action import GUESSES, BoxQP
 from .members import MemberRows, Problems, segment_max
 from .newton_batch import first_guesses
@@ -84,24 +85,12 @@ def _turn(R: MemberRows, v: np.ndarray, theta: np.ndarray) -> np.ndarray:
     return out
 
 
-def _held(R: MemberRows, x, lo, hi, y=None, has_y=None):
-    """``active_set.held_at_bounds`` of every member (its own tolerance); y: OSQP's duals where
-    ``has_y`` (the rows of the members whose OSQP answer guesses the set)."""
-    tol = 1e-12 * np.maximum(segment_max(np.abs(x), R.of_row, R.K), 1e-300)[R.of_row]
-    at_hi = x >= hi - tol
-    at_lo = (x <= lo + tol) & ~at_hi
-    if y is not None:
-        at_hi |= has_y & (y > 0)
-        at_lo = (at_lo | (has_y & (y < 0))) & ~at_hi
-    return at_lo & np.isfinite(lo), at_hi & np.isfinite(hi)
-
-
 def _first_qps(b: Problems, Hs, c, lo, hi, x0, qps) -> list:
     """Each member's ``FastBoxQP.__call__(H, c, lo, hi, x0)`` as the first QP of its step: OSQP's
     loose solve, then the certified solve on the held set it guesses (or the member's own rest)."""
     R = b.rows
     x0 = np.clip(x0, lo, hi)
-    at_lo, at_hi = _held(R, x0, lo, hi)
+    at_lo, at_hi = held(R, x0, lo, hi)
     y0 = np.where(at_lo | at_hi, -(b.products(Hs, x0) + c), 0.0)
     starts, duals, counts, failed = [], [], [], {}
     for k, qp in enumerate(qps):
@@ -118,7 +107,7 @@ def _first_qps(b: Problems, Hs, c, lo, hi, x0, qps) -> list:
     x0 = np.concatenate(starts)
     has_y = np.repeat([y is not None for y in duals], R.n)
     y = np.concatenate([np.zeros(R.n[k]) if d is None else d for k, d in enumerate(duals)])
-    x, certified = _held_solve(b, Hs, c, lo, hi, _held(R, x0, lo, hi, y, has_y))
+    x, certified = solve_boxes(R, Hs, c, (lo, hi), held(R, x0, lo, hi, y, has_y))
     out = []
     for k, qp in enumerate(qps):
         rows = R.row_slice(k)
@@ -133,47 +122,6 @@ def _first_qps(b: Problems, Hs, c, lo, hi, x0, qps) -> list:
         except Exception as exc:
             out.append(exc)
     return out
-
-
-def _held_solve(b: Problems, Hs, c, lo, hi, held):
-    """(x, certified (K,)): ``active_set.solve_box``'s first round on the guessed held set ``held`` =
-    (at_lo, at_hi) of every member, and whether its certificate accepts each member's answer."""
-    R, fixed = b.rows, lo == hi
-    at_hi = held[1] & ~fixed
-    at_lo = (held[0] | fixed) & ~at_hi
-    x = np.where(at_hi, hi, lo)
-    free = ~(at_lo | at_hi)
-    solved = np.ones(R.K, dtype=bool)
-    for k, H in enumerate(Hs):
-        rows = R.row_slice(k)
-        x_k, F = x[rows], free[rows].nonzero()[0]
-        if len(F):
-            x_k[F] = 0.0
-            # H_FF x_F = -(c_F + H_FW x_W): LAPACK's Cholesky solve (posv)
-            H_F = H.take(F, 0)
-            _, x_F, info = _posv(H_F.take(F, 1), -(c[rows].take(F) + H_F @ x_k), lower=True)
-            solved[k] = info == 0
-            x_k[F] = x_F
-    r = b.products(Hs, x) + c
-    return x, solved & _certificates(R, x, (at_lo, at_hi, fixed, free), r, c, (lo, hi))
-
-
-def _certificates(R: MemberRows, x, held, r, c, box) -> np.ndarray:
-    """(K,) ``active_set._certified`` of every member at OSQP's tolerances (EPS, EPS); held =
-    (at_lo, at_hi, fixed, free), box = (lo, hi)."""
-    (at_lo, at_hi, fixed, free), (lo, hi) = held, box
-    member, K = R.of_row, R.K
-    abs_g = np.abs(r)
-    tol_p = EPS + EPS * segment_max(np.abs(x), member, K)
-    tol_d = EPS + EPS * segment_max(abs_g * ~free, member, K)
-    # held variables sit on a bound, so the largest violation over all variables is the free ones'
-    primal = ~(segment_max(np.maximum(lo - x, x - hi), member, K) > tol_p)
-    sign = at_hi.astype(float) - (at_lo & ~fixed)
-    dual = ~(segment_max(r * sign, member, K) > tol_d)
-    scale = np.maximum(segment_max(np.abs(r - c), member, K), segment_max(np.abs(c), member, K))
-    finite = np.ones(K, dtype=bool)
-    np.logical_and.at(finite, member, np.isfinite(x))
-    return primal & dual & finite & (segment_max(abs_g * free, member, K) <= EPS + EPS * scale)
 
 
 def kkt_all(problems, xs) -> list:

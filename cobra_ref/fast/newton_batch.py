@@ -182,13 +182,16 @@ class _System:
         target[R.servo] = np.where(act.at_lo, b.lo, b.hi)
         self.pinned, self.target, self.F_pinned = P, target[P], self.F_row[P]
         # the part of K that every iterate starts from: H, and the pinned rows
-        self.base = np.zeros(K0[-1] + size[-1] ** 2)
+        self.flat = np.zeros(K0[-1] + size[-1] ** 2)
         for k, p in enumerate(b.problems):
-            self.base[K0[k]:K0[k] + size[k] ** 2].reshape(size[k], size[k])[:R.n[k], :R.n[k]] = p.H
+            self.flat[K0[k]:K0[k] + size[k] ** 2].reshape(size[k], size[k])[:R.n[k], :R.n[k]] = p.H
         p_member = R.of_row[P]
-        self.base[whole_rows(p_member, local[P], size[p_member])] = 0.0
-        self.base[at(p_member, local[P], local[P])] = 1.0
-        self.flat = self.base.copy()
+        self.flat[whole_rows(p_member, local[P], size[p_member])] = 0.0
+        self.flat[at(p_member, local[P], local[P])] = 1.0
+        # ``at`` writes K in place: the entries it changes are restored from their values here first
+        self.changed = np.concatenate([self.diag_T1, self.diag_T2, self.dT1_dN, self.dT2_dN, self.row_D,
+                                       self.rows_T, self.circle])
+        self.saved = self.flat[self.changed]
         self.K = [self.flat[K0[k]:K0[k] + size[k] ** 2].reshape(size[k], size[k]) for k in range(R.K)]
         self.H_part = [K[:n, :n] for K, n in zip(self.K, R.n)]
 
@@ -198,7 +201,7 @@ class _System:
     def at(self, X: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """F at (X, theta), with every member's K written into ``self.K`` (``_NewtonSystem.at``)."""
         b, R, S, flat = self.b, self.b.rows, self.S, self.flat
-        np.copyto(flat, self.base)
+        flat[self.changed] = self.saved
         p_N = np.maximum(X[R.N], 0.0)
         R_T = b.stick_slip(b.mu * p_N)
         E = self.E
