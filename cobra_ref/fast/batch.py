@@ -11,8 +11,9 @@ each:
   ``contact_jacobian_batch``);
 * from ``BATCHED_FROM`` members on, the rows of the least-action problems
   (:func:`cobra_ref.fast.problem_batch.least_action_problems`) and the vector work of the friction
-  loop's first guess and first iterate (:func:`cobra_ref.fast.iterate_batch.solve_all`), and the
-  KKT residuals of the impulses (``iterate_batch.kkt_all``).
+  loop's first guess and first iterate (:func:`cobra_ref.fast.iterate_batch.solve_all`, its certified
+  box solves' rounds in :mod:`cobra_ref.fast.box_batch`), and the KKT residuals of the impulses
+  (``iterate_batch.kkt_all``).
 
 The rest of each member's step (its free velocity and G, its OSQP and LAPACK solves, the result) is
 its own :class:`cobra_ref.fast.stepper.FastStepper`'s (``rows``, ``posed``, ``finish``), given
