@@ -66,8 +66,9 @@ def solve_box_qp(H: np.ndarray, c: np.ndarray, lo: np.ndarray, hi: np.ndarray, x
 def osqp_solve(solver: osqp.OSQP, x0=None, y0=None):
     """``solver``'s answer, warm-started at (x0, y0) unless x0 is None; a Ctrl-C that OSQP caught
     during the solve is raised again here, so Python's SIGINT handler sees it (a
-    ``KeyboardInterrupt`` by default). Where SIGINT is ignored (a pool worker), the solve starts
-    again from (x0, y0)."""
+    ``KeyboardInterrupt`` by default). Where SIGINT is ignored (a pool worker, which its main
+    process then ends), the solve starts again from (x0, y0), with any step size rho that OSQP
+    adapted before the interrupt."""
     while True:
         if x0 is not None:
             solver.warm_start(x=x0, y=y0)
