@@ -53,7 +53,7 @@ from ..gaits import gait, gait_params
 from ..infra.executors import own_pool, progress_queue
 from ..infra.output import write_error
 from ..params import CobraParameters
-from ..placement import TravelPlacement, travel_placement
+from ..placement import travel_placement
 from ..infra.progress import end_line, progress_printer, rewrite
 from ..infra.validation import DEFAULT_DT, check
 from ..robots import cobra_model
@@ -185,14 +185,13 @@ def _placement(gait_name: str, params_json: str, dt: float, mu_robot_box):
     return travel_placement(cobra_model(spec.cobra_parameters(), with_box=False), spec.reference(), dt)
 
 
-def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Trajectory, bool]:
+def simulate_spec(spec: RunSpec, progress=None) -> tuple[Trajectory, bool]:
     """Simulate ``spec`` from its placed and settled start, its member's perturbation applied;
     return (trajectory, failed): a run that fails mid-way returns what it computed, its error set.
 
     The simulation of ``run``, alone so that any executor can run it (nothing is written).
-    ``placement``: sidewinding's ``nominal_placement``, if it is known (computed here otherwise).
     """
-    model, ref, start, placement = _start(spec, placement)
+    model, ref, start, placement = _start(spec)
     try:
         traj, failed = simulate(model, ref, spec.duration, StepSettings(dt=spec.dt), *start, progress=progress), False
     except SimulationError as exc:
@@ -203,11 +202,11 @@ def simulate_spec(spec: RunSpec, progress=None, placement=None) -> tuple[Traject
     return traj, failed
 
 
-def simulate_specs(specs, progress=None, placement=None) -> list:
+def simulate_specs(specs, progress=None) -> list:
     """``simulate_spec`` of each of ``specs`` (one ``batch_key``), their runs advanced together as
     one batch (:mod:`cobra_ref.batch`: each the same steps, bit for bit, as its own run):
     [(trajectory, failed)] in order."""
-    models, references, starts, placements = zip(*(_start(spec, placement) for spec in specs))
+    models, references, starts, placements = zip(*(_start(spec) for spec in specs))
     settings = StepSettings(dt=specs[0].dt)
     n_steps = duration_steps(specs[0].duration, settings.dt)
     run = BatchRun(list(models), settings, starts, n_steps)
@@ -227,12 +226,12 @@ def batch_key(spec: RunSpec) -> tuple:
     return (spec.box_size, spec.box_mass, spec.dt, spec.duration)
 
 
-def _start(spec: RunSpec, placement=None):
-    """(model, reference, (q0, qd0), placement) of ``spec``: its placed and settled start (``simulate_spec``)."""
+def _start(spec: RunSpec):
+    """(model, reference, (q0, qd0), placement) of ``spec``: its placed and settled start (``simulate_spec``);
+    placement is the travelling rule's (``nominal_placement``), None for a box placed by A9."""
     model = cobra_model(spec.cobra_parameters(), with_box=True)
     ref = spec.reference()
-    if spec.travels and placement is None:
-        placement = nominal_placement(spec)
+    placement = nominal_placement(spec) if spec.travels else None
     direction = None if placement is None else placement.direction
     member = spec.member
     start = initial_state(model, ref, placement=BoxPlacement(
@@ -286,12 +285,12 @@ def load(spec: RunSpec, cache_dir: str) -> Trajectory | None:
     return None if path is None else verified(path, lambda p: read_trajectory(p, spec.key()))
 
 
-def _run_in_worker(specs: list, queue=None, placement=None):
+def _run_in_worker(specs: list, queue=None):
     """Executor entry: simulate a batch of specs (``simulate_specs``), reporting (label, done,
     total) to ``queue`` if given."""
     label = specs[0].label() + (f" and {len(specs) - 1} more" if len(specs) > 1 else "")
     report = None if queue is None else (lambda done, total: queue.put((label, done, total)))
-    return simulate_specs(specs, report, placement)
+    return simulate_specs(specs, report)
 
 
 def batch_size(runs: int, workers: int | None) -> int:
@@ -307,14 +306,6 @@ def batches(specs, size: int = BATCH_SIZE) -> list:
     for spec in specs:
         groups.setdefault(batch_key(spec), []).append(spec)
     return [group[i:i + size] for group in groups.values() for i in range(0, len(group), size)]
-
-
-def _recorded_placement(traj: Trajectory):
-    """The ``TravelPlacement`` a sidewinding run was placed by, read back from its ``meta`` (None if absent)."""
-    m = traj.meta
-    if m.get("box_direction") is None or m.get("box_reach") is None:
-        return None
-    return TravelPlacement(tuple(m["box_direction"]), m["box_reach"], m["box_gap"])
 
 
 def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = None,
@@ -374,12 +365,11 @@ def _run_on(executor, todo, cache_dir: str, progress: bool, queue, stored: list,
     """Submit every spec of ``todo`` to ``executor`` in ``batches`` of at most ``size`` (one task
     each), store each result as its batch completes, report progress.
 
-    Sidewinding's members wait for their nominal run when it is in ``todo`` too, and start from
-    the placement it recorded: its box-free placement run is then made once, not in every worker.
+    A sidewinding member needs its nominal run's box-free placement run (``nominal_placement``): it
+    is made once in each process that needs it (a few seconds), so members go in full batches of
+    their own key rather than waiting for their nominal run to finish.
     """
-    nominal = {s for s in todo if s.member is None}
-    held = [s for s in todo if s.travels and s.member is not None and replace(s, member=None) in nominal]
-    futures = {executor.submit(_run_in_worker, b, queue): b for b in batches([s for s in todo if s not in held], size)}
+    futures = {executor.submit(_run_in_worker, b, queue): b for b in batches(todo, size)}
     watcher = _Progress(todo, progress, queue)
     pending = set(futures)
     try:
@@ -389,15 +379,6 @@ def _run_on(executor, todo, cache_dir: str, progress: bool, queue, stored: list,
                 for spec, (traj, failed) in zip(futures[f], f.result()):  # re-raises a run's exception here
                     stored.append(store(spec, cache_dir, traj, failed))
                     watcher.completed(spec)
-                    # the members of a nominal run that has just recorded its placement go now
-                    ready = [s for s in held if replace(s, member=None) == spec]
-                    if ready:
-                        placement = _recorded_placement(traj)
-                        held = [s for s in held if s not in ready]
-                        for b in batches(ready, size):
-                            started = executor.submit(_run_in_worker, b, queue, placement)
-                            futures[started] = b
-                            pending.add(started)
             watcher.poll()
     except BaseException:
         for f in pending:
