@@ -365,9 +365,9 @@ def _run_on(executor, todo, cache_dir: str, progress: bool, queue, stored: list,
     """Submit every spec of ``todo`` to ``executor`` in ``batches`` of at most ``size`` (one task
     each), store each result as its batch completes, report progress.
 
-    A sidewinding member needs its nominal run's box-free placement run (``nominal_placement``): it
-    is made once in each process that needs it (a few seconds), so members go in full batches of
-    their own key rather than waiting for their nominal run to finish.
+    A sidewinding member needs its nominal run's box-free placement run (``nominal_placement``),
+    made once in each process that needs it (a few seconds); members go in batches of their own key
+    like every other run.
     """
     futures = {executor.submit(_run_in_worker, b, queue): b for b in batches(todo, size)}
     watcher = _Progress(todo, progress, queue)
