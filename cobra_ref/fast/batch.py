@@ -126,8 +126,6 @@ class BatchStepper:
         if not solving:
             return solved
         qps = [self.members[active[j]].qp for j in solving]
-        for qp in qps:
-            qp.new_step()
         answers = solve_all([prepared[j].system.problem for j in solving], [prepared[j].x_start for j in solving], qps)
         for j, answer in zip(solving, answers):
             solved[j] = answer

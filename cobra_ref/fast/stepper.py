@@ -171,7 +171,8 @@ class FastStepper:
         # loop, OSQP on every iterate, solves it again from the same start
         if solved is None:
             self.qp.new_step()
-        x, info = solve_least_action(problem, x_start, self.qp) if solved is None else solved
+            solved = solve_least_action(problem, x_start, self.qp)
+        x, info = solved
         if not info.converged:
             residuals = None  # of the x solved again below, not of the one given
             x, again = solve_least_action(problem, x_start)
