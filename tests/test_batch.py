@@ -127,12 +127,18 @@ def test_the_optimizers_rollouts_cost_the_same_in_a_batch_as_one_by_one():
 def test_the_figures_ensemble_members_run_in_a_batch_as_alone():
     # members of one ensemble differ in friction (their models) and start (the box): one batch
     from cobra_ref.reproduce.ensemble import members
-    from cobra_ref.reproduce.runs import BATCH_SIZE, RunSpec, batch_size, batches, simulate_spec, simulate_specs
+    from cobra_ref.reproduce.runs import (BATCH_SIZE, POOL_BATCH, RunSpec, batch_size, batches, simulate_spec,
+                                          simulate_specs)
 
     specs = [RunSpec("C", duration=0.2, member=m) for m in members("C", 3)[1:]] + [RunSpec("J", duration=0.2)]
-    assert [len(b) for b in batches(specs + [RunSpec("C", duration=0.3)], size=2)] == [2, 1, 1]
-    # every worker gets a batch: three runs on two workers go as two batches, 165 on two as batches of four
-    assert (batch_size(3, 2), batch_size(165, 2), batch_size(5, None), batch_size(1, 8)) == (2, BATCH_SIZE, BATCH_SIZE, 1)
+    # one key's three runs in batches of at most two: two batches, the larger (more steps) first, then the
+    # 0.3 s run (more steps than the 0.2 s run alone); five runs in batches of at most four: three and two
+    longer = RunSpec("C", duration=0.3)
+    assert [[s.duration for s in b] for b in batches(specs + [longer], size=2)] == [[0.2, 0.2], [0.3], [0.2]]
+    assert [len(b) for b in batches(specs + [RunSpec("S", duration=0.2), RunSpec("J-mirror", duration=0.2)], 4)] == [3, 2]
+    # every worker gets a batch: three runs on two workers go as two batches, 165 on two as batches of at most
+    # POOL_BATCH, on an executor's unknown workers of BATCH_SIZE
+    assert (batch_size(3, 2), batch_size(165, 2), batch_size(5, None), batch_size(1, 8)) == (2, POOL_BATCH, BATCH_SIZE, 1)
     for (together, failed), spec in zip(simulate_specs(specs), specs):
         alone, alone_failed = simulate_spec(spec)
         assert failed is alone_failed is False and together.meta["member"] == alone.meta["member"]

@@ -274,3 +274,16 @@ def test_mujoco_submit_computes_rows_whose_entry_is_damaged(tmp_path, monkeypatc
     job = mujoco_job.mujoco_submit(None, specs, runs, 1.0, cache, False, False)
     assert job["rows"] is None and job["futures"] == ["computing"]
     assert capsys.readouterr().err.startswith(f"cache entry {job['cached']} is damaged (unreadable: JSONDecodeError")
+
+
+def test_a_single_worker_advances_the_runs_in_batches(tmp_path, monkeypatch):
+    # one worker: the runs of one key go as one batch in this process (as a pool's worker runs them)
+    from cobra_ref.reproduce import runs
+
+    sizes = []
+    real = runs.simulate_specs
+    monkeypatch.setattr(runs, "simulate_specs", lambda specs, progress=None: sizes.append(len(specs)) or real(specs))
+    third = RunSpec("S", duration=0.02, dt=0.002)
+    got = run_all([SPEC, OTHER, third], str(tmp_path), workers=1, progress=False)
+    assert sorted(sizes) == [1, 2]  # SPEC and third share a key (box, dt, duration); OTHER is shorter
+    assert got[SPEC].error == "" and np.array_equal(got[SPEC].q, runs.simulate_spec(SPEC)[0].q)

@@ -68,7 +68,9 @@ from .ensemble import Member
 
 PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
 PLACEMENTS = ("per gait", "travel")  # the box placement rules: A9 (A31 for sidewinding), or A31 for every gait
-BATCH_SIZE = 16  # runs advanced together in one task of a pool (``batches``; ``cobra_ref.batch``, faster per run in larger batches)
+# runs advanced together in one task (``batches``; ``cobra_ref.batch``, faster per run in larger batches):
+BATCH_SIZE = 16  # on an executor whose workers are not known (a cluster: more tasks than workers)
+POOL_BATCH = 48  # at most, on our own pool of known workers (each 6 s run's log holds some 20 MB)
 
 
 
@@ -288,24 +290,34 @@ def load(spec: RunSpec, cache_dir: str) -> Trajectory | None:
 def _run_in_worker(specs: list, queue=None):
     """Executor entry: simulate a batch of specs (``simulate_specs``), reporting (label, done,
     total) to ``queue`` if given."""
-    label = specs[0].label() + (f" and {len(specs) - 1} more" if len(specs) > 1 else "")
+    label = _label(specs)
     report = None if queue is None else (lambda done, total: queue.put((label, done, total)))
     return simulate_specs(specs, report)
 
 
+def _label(specs) -> str:
+    """A batch's name in the progress lines: its first run's label, and how many more it advances."""
+    return specs[0].label() + (f" and {len(specs) - 1} more" if len(specs) > 1 else "")
+
+
 def batch_size(runs: int, workers: int | None) -> int:
-    """The batch size for ``runs`` runs on ``workers`` workers (None: unknown, an executor's):
-    ``BATCH_SIZE``, or fewer so that every worker gets a batch."""
-    return BATCH_SIZE if not workers else max(1, min(BATCH_SIZE, -(-runs // workers)))
+    """The largest batch for ``runs`` runs on ``workers`` workers: ``BATCH_SIZE`` where they are
+    not known (None, an executor's), else a worker's share of the runs, at most ``POOL_BATCH``."""
+    return BATCH_SIZE if not workers else max(1, min(POOL_BATCH, -(-runs // workers)))
 
 
 def batches(specs, size: int = BATCH_SIZE) -> list:
-    """``specs`` in batches of at most ``size`` runs that share a ``batch_key``, in the order of
-    each key's first run (the longest runs first stay first)."""
+    """``specs`` in batches of runs that share a ``batch_key``: each key's runs split into the fewest
+    batches of at most ``size``, as even as can be, the batches of the most steps first (so that no
+    worker is left alone with a long one at the end)."""
     groups: dict = {}
     for spec in specs:
         groups.setdefault(batch_key(spec), []).append(spec)
-    return [group[i:i + size] for group in groups.values() for i in range(0, len(group), size)]
+    out = []
+    for group in groups.values():
+        n = -(-len(group) // size)
+        out += [group[i * len(group) // n:(i + 1) * len(group) // n] for i in range(n)]
+    return sorted(out, key=lambda batch: -len(batch) * batch[0].duration)
 
 
 def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = None,
@@ -317,9 +329,9 @@ def run_all(specs, cache_dir: str, force: bool = False, workers: int | None = No
     pool, ``executors.SerialExecutor``, a Dask client's ``get_executor()``); the runs are simulated
     there and written to ``cache_dir`` here. Default: a process pool with ``executors.worker_init``
     on ``workers`` processes (default: the machine's cores), or this process for a single run or a
-    single worker. Progress on stderr: the runs done of the total and the time left, as each run
-    completes; with the default pool also each running run's percentage. A run's exception is raised
-    here.
+    single worker; either advances the runs in ``batches``. Progress on stderr: with a pool, the runs
+    done of the total and the time left as each run completes, and each running batch's percentage;
+    in this process, each batch's percentage. A run's exception is raised here.
     """
     specs = list(specs)
     check_workers(workers)
@@ -355,10 +367,13 @@ def _run_todo(todo, cache_dir: str, workers, progress: bool, executor, stored: l
         # the workers and the progress queue's server end at once on an interrupt (executors)
         with progress_queue() as queue, own_pool(min(workers, len(todo))) as pool:
             _run_on(pool, todo, cache_dir, progress, queue, stored, batch_size(len(todo), workers))
-    else:
-        for i, s in enumerate(todo):
-            label = f"  run {i + 1}/{len(todo)} {s.label()}"
-            stored.append(store(s, cache_dir, *simulate_spec(s, progress_printer(label) if progress else None)))
+    else:  # in this process, in batches as a pool's worker runs them, each stored as its batch ends
+        done = 0
+        for batch in batches(todo, batch_size(len(todo), 1)):
+            label = f"  runs {done + 1}-{done + len(batch)}/{len(todo)} {_label(batch)}"
+            for spec, result in zip(batch, simulate_specs(batch, progress_printer(label) if progress else None)):
+                stored.append(store(spec, cache_dir, *result))
+            done += len(batch)
 
 
 def _run_on(executor, todo, cache_dir: str, progress: bool, queue, stored: list, size: int = BATCH_SIZE) -> None:
