@@ -224,8 +224,8 @@ def test_figures_on_a_full_disk_names_the_cache_entry_it_could_not_write(tmp_pat
     from cobra_ref.trajectory import Trajectory
 
     # the figures' runs without their simulations: each is the short run of run_npz
-    monkeypatch.setattr(runs, "simulate_spec", lambda spec, progress=None, placement=None: (
-        Trajectory.from_npz(run_npz), False))
+    monkeypatch.setattr(runs, "simulate_specs", lambda specs, progress=None: [
+        (Trajectory.from_npz(run_npz), False) for _ in specs])
     out = tmp_path / "figures"
     full_disk(tmp_path)
     code, line, err = run_cli(["figures", "--quick", "--gaits", "C", "--no-mujoco", "--jobs", "1", "--quiet",
