@@ -142,3 +142,47 @@ def test_the_command_refuses_a_restart_past_the_duration():
     with pytest.raises(SystemExit) as exc:
         main(["convergence", "--gait", "C", "--duration", "0.01", "--restart", "0.02", "--quiet"])
     assert "restart" in str(exc.value) and "0.02" in str(exc.value)
+
+
+# ------------------------------------------------------------------------------ the figures' members
+
+def test_each_member_of_the_members_study_is_its_own_figure_run_at_each_dt():
+    # member k's row at dt is the metrics of its figure run (its figure start, its parameters and
+    # perturbation) shortened to the study's duration and run alone at that dt: the batch changes nothing
+    from dataclasses import replace
+
+    from cobra_ref.reproduce import convergence_members as cm
+    from cobra_ref.reproduce.runs import figure_start, simulate_spec
+    from cobra_ref.simulate import simulate
+    from cobra_ref.step import StepSettings
+
+    result = cm.members_study("J", 2, duration=0.02, dts=(2e-3, 1e-3))
+    specs = cm.figure_members("J", 2, 0.02)
+    assert specs[0].member is None and specs[1].member is not None  # member 0 is the figure run
+    figure = simulate_spec(specs[1])[0]  # the figure command's run of member 1, at the figures' 1 ms
+    assert result[1e-3][1] == {**cv.metrics(figure, figure_start(specs[1])[0]), "error": ""}
+    model, reference, start, _ = figure_start(specs[0])
+    alone = simulate(model, reference, 0.02, StepSettings(dt=2e-3), *start)
+    assert result[2e-3][0] == {**cv.metrics(alone, model), "error": ""}
+    assert result[2e-3][0] != result[2e-3][1]  # the members differ (their box, phase and friction)
+    moved = cm.member_changes(result)
+    assert len(moved) == 2 and moved[1]["force_p99"] == [
+        (result[1e-3][1]["force_p99"] - result[2e-3][1]["force_p99"]) / result[2e-3][1]["force_p99"]]
+    assert "member 1" in cm.format_members(result, "J")
+
+
+def test_the_command_studies_the_figures_members_and_refuses_settings_or_restart(tmp_path, capsys):
+    out = tmp_path / "members.json"
+    assert main(["convergence", "--gait", "C", "--duration", "0.004", "--members", "2", "--quiet",
+                 "--json", str(out)]) == 0
+    record = json.loads(out.read_text())
+    assert record["members"] == 2 and len(record["changes"]) == 2
+    assert [len(rows) for rows in record["results"].values()] == [2] * len(cv.DTS)
+    assert "the figures' runs (2 members" in capsys.readouterr().out
+    for extra in (["--settings", "rigid"], ["--restart", "0.002"]):
+        with pytest.raises(SystemExit) as exc:
+            main(["convergence", "--gait", "C", "--duration", "0.004", "--members", "2", "--quiet"] + extra)
+        assert "--members" in str(exc.value) and extra[0] in str(exc.value)
+    with pytest.raises(SystemExit):
+        main(["convergence", "--members", "0", "--quiet"])
+    assert "--members = 0 is out of range" in capsys.readouterr().err

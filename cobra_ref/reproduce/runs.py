@@ -193,7 +193,7 @@ def simulate_spec(spec: RunSpec, progress=None) -> tuple[Trajectory, bool]:
 
     The simulation of ``run``, alone so that any executor can run it (nothing is written).
     """
-    model, ref, start, placement = _start(spec)
+    model, ref, start, placement = figure_start(spec)
     try:
         traj, failed = simulate(model, ref, spec.duration, StepSettings(dt=spec.dt), *start, progress=progress), False
     except SimulationError as exc:
@@ -208,7 +208,7 @@ def simulate_specs(specs, progress=None) -> list:
     """``simulate_spec`` of each of ``specs`` (one ``batch_key``), their runs advanced together as
     one batch (:mod:`cobra_ref.batch`: each the same steps, bit for bit, as its own run):
     [(trajectory, failed)] in order."""
-    models, references, starts, placements = zip(*(_start(spec) for spec in specs))
+    models, references, starts, placements = zip(*(figure_start(spec) for spec in specs))
     settings = StepSettings(dt=specs[0].dt)
     n_steps = duration_steps(specs[0].duration, settings.dt)
     run = BatchRun(list(models), settings, starts, n_steps)
@@ -228,7 +228,7 @@ def batch_key(spec: RunSpec) -> tuple:
     return (spec.box_size, spec.box_mass, spec.dt, spec.duration)
 
 
-def _start(spec: RunSpec):
+def figure_start(spec: RunSpec):
     """(model, reference, (q0, qd0), placement) of ``spec``: its placed and settled start (``simulate_spec``);
     placement is the travelling rule's (``nominal_placement``), None for a box placed by A9."""
     model = cobra_model(spec.cobra_parameters(), with_box=True)
