@@ -17,7 +17,6 @@ import numpy as np
 from .fast.batch import BatchStepper
 from .infra import arguments
 from .infra.executors import one_blas_thread
-from .model import Model
 from .simulate import RunLog, check_start, meta, step_failure
 from .step import StepSettings
 
@@ -107,11 +106,12 @@ class BatchRun:
                 for log, error, model, member in zip(self.logs, self.errors, self.models, self.stepping.members)]
 
 
-def simulate_batch(model: Model, references, duration: float, settings: StepSettings, starts) -> list:
-    """``simulate.simulate`` for a batch: member k from ``starts[k]`` = (q0, qd0) following
-    ``references[k]`` for ``duration`` seconds; a Trajectory per member, a failed member's with its
+def simulate_batch(model, references, duration: float, settings: StepSettings, starts, progress=None) -> list:
+    """``simulate.simulate`` for a batch: member k of ``model`` (or of ``model[k]``, as ``BatchRun``
+    takes it) from ``starts[k]`` = (q0, qd0) following ``references[k]`` for ``duration`` seconds,
+    ``progress`` as ``BatchRun.advance`` calls it; a Trajectory per member, a failed member's with its
     ``error`` set (the others run to the end)."""
     n_steps = arguments.duration_steps(duration, settings.dt)
     run = BatchRun(model, settings, starts, n_steps)
-    run.advance(references, n_steps)
+    run.advance(references, n_steps, progress)
     return run.finish()

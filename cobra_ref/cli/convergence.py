@@ -17,7 +17,7 @@ def cmd_convergence(args) -> int:
 
     if args.json is not None:
         check_out(args.json, "--json")
-    settings = tuple(s.strip() for s in (args.settings or "high-fidelity,rigid").split(","))
+    settings = tuple(s.strip() for s in (args.settings or ",".join(SETTINGS)).split(","))
     try:
         for name in settings:
             check_choice("--settings", name, SETTINGS)

@@ -3,8 +3,8 @@
 For performance: ``solve_all(problems, starts, qps)`` is ``[least_action.solve_least_action(p, x,
 qp) for ...]``, bit for bit, for the members of a batched step (:mod:`cobra_ref.fast.batch`), each
 with its own ``FastBoxQP``, whose first QP of the step is solved here (``new_step`` need not be
-called); the friction loop mostly ends at its first iterate. Batched, for all members in one NumPy call each (per-member maxima as segment maxima,
-``members.segment_max``):
+called); the friction loop mostly ends at its first iterate. Batched, for all members in one NumPy
+call each (per-member maxima as segment maxima, ``members.segment_max``):
 
 * the first guess (:func:`cobra_ref.fast.newton_batch.first_guesses`);
 * the first iterate's vector work: the box's bounds, the tangent frames' turns of c and x, the

@@ -17,8 +17,7 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from ..batch import BatchRun
-from ..infra.arguments import duration_steps
+from ..batch import simulate_batch
 from ..step import StepSettings
 from .convergence import DTS, changes, metrics
 from .runs import figure_start
@@ -44,12 +43,9 @@ def members_study(gait_name: str, n_members: int, duration: float = 2.0, dts=DTS
     out = {}
     for dt in dts:
         clock = time.perf_counter()
-        n_steps = duration_steps(duration, dt)
-        run = BatchRun([model for model, *_ in starts], StepSettings(dt=dt), [start for _, _, start, _ in starts],
-                       n_steps)
-        run.advance([reference for _, reference, *_ in starts], n_steps)
-        out[dt] = [{**metrics(traj, model), "error": traj.error}
-                   for traj, (model, *_) in zip(run.finish(), starts)]
+        models, references, initial, _ = zip(*starts)
+        out[dt] = [{**metrics(traj, model), "error": traj.error} for traj, model in
+                   zip(simulate_batch(list(models), references, duration, StepSettings(dt=dt), initial), models)]
         if progress:
             progress(f"{gait_name}, {n_members} members, dt = {dt * 1e3:g} ms: {time.perf_counter() - clock:.0f} s")
     return out

@@ -57,8 +57,7 @@ from ..placement import travel_placement
 from ..infra.progress import end_line, progress_printer, rewrite
 from ..infra.validation import DEFAULT_DT, check
 from ..robots import cobra_model
-from ..batch import BatchRun
-from ..infra.arguments import duration_steps
+from ..batch import simulate_batch
 from ..simulate import LeftPhysicsWarning, left_physics, simulate
 from ..start import BoxPlacement, initial_state
 from ..step import SimulationError, StepSettings
@@ -209,12 +208,10 @@ def simulate_specs(specs, progress=None) -> list:
     one batch (:mod:`cobra_ref.batch`: each the same steps, bit for bit, as its own run):
     [(trajectory, failed)] in order."""
     models, references, starts, placements = zip(*(figure_start(spec) for spec in specs))
-    settings = StepSettings(dt=specs[0].dt)
-    n_steps = duration_steps(specs[0].duration, settings.dt)
-    run = BatchRun(list(models), settings, starts, n_steps)
-    run.advance(references, n_steps, progress)
+    trajectories = simulate_batch(list(models), references, specs[0].duration, StepSettings(dt=specs[0].dt), starts,
+                                  progress)
     out = []
-    for spec, ref, used, traj in zip(specs, references, placements, run.finish()):
+    for spec, ref, used, traj in zip(specs, references, placements, trajectories):
         message = left_physics(traj)
         if message:  # as simulate says it
             warnings.warn(message, LeftPhysicsWarning, stacklevel=2)
