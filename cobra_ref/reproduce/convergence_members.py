@@ -39,11 +39,11 @@ def members_study(gait_name: str, n_members: int, duration: float = 2.0, dts=DTS
     """{dt: [metrics of each member]} of the figures' first ``n_members`` runs of ``gait_name``
     (module docstring); a member whose run fails has its ``error`` in its row (its metrics are of
     the steps it took)."""
-    starts = [figure_start(spec) for spec in figure_members(gait_name, n_members, duration)]
+    models, references, initial, _ = zip(*(figure_start(spec) for spec in figure_members(gait_name, n_members,
+                                                                                         duration)))
     out = {}
     for dt in dts:
         clock = time.perf_counter()
-        models, references, initial, _ = zip(*starts)
         out[dt] = [{**metrics(traj, model), "error": traj.error} for traj, model in
                    zip(simulate_batch(list(models), references, duration, StepSettings(dt=dt), initial), models)]
         if progress:
