@@ -69,7 +69,7 @@ PAPER_GAITS = ("C", "S", "J", "J-mirror", "sidewinding")
 PLACEMENTS = ("per gait", "travel")  # the box placement rules: A9 (A31 for sidewinding), or A31 for every gait
 # runs advanced together in one task (``batches``; ``cobra_ref.batch``, faster per run in larger batches):
 BATCH_SIZE = 16  # on an executor whose workers are not known (a cluster: more tasks than workers)
-POOL_BATCH = 48  # at most, on our own pool of known workers (each 6 s run's log holds some 20 MB)
+POOL_BATCH = 48  # at most, on our own pool of known workers (each member holds its log in memory: docs/results.md)
 
 
 
