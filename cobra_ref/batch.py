@@ -18,6 +18,7 @@ from .fast.batch import BatchStepper
 from .infra import arguments
 from .infra.executors import one_blas_thread
 from .simulate import RunLog, check_start, meta, step_failure
+from .start import BoxPlacement, Hold, Relaxation, check_run_arguments, placed_state
 from .step import StepSettings
 
 
@@ -115,3 +116,43 @@ def simulate_batch(model, references, duration: float, settings: StepSettings, s
     run = BatchRun(model, settings, starts, n_steps)
     run.advance(references, n_steps, progress)
     return run.finish()
+
+
+def initial_states(models, references, placements, settings: StepSettings = StepSettings()) -> list:
+    """``start.initial_state`` for a batch: member k's (q0, qd0), ``models[k]`` placed by
+    ``placements[k]`` (a ``BoxPlacement``) and settled holding ``references[k]``' t = 0 shape, the
+    members' settling steps taken together; each member's start is its ``initial_state``, bit for bit.
+
+    Implements: the start at rest (assumption A25), each member relaxed on its own
+    (``start.Relaxation``) and leaving the batch once it has settled; a member whose step fails
+    raises, as ``initial_state`` does.
+    """
+    models, references, placements = list(models), list(references), list(placements)
+    if not len(models) == len(references) == len(placements):
+        raise ValueError(f"a batch's starts need as many models, references and placements, got {len(models)}, "
+                         f"{len(references)} and {len(placements)}")
+    for model, reference, placement in zip(models, references, placements):
+        check_run_arguments(model, reference, settings, "fast")
+        arguments.instance("placement", placement, BoxPlacement, "BoxPlacement(gap=0.05)")
+    if not models:
+        return []
+    Q = np.array([placed_state(m, ref, p) for m, ref, p in zip(models, references, placements)], dtype=float)
+    QD = np.zeros((len(models), models[0].nv))
+    holds = [Hold(reference(0.0)[0]) for reference in references]
+    relaxations = [Relaxation(settings.dt) for _ in models]
+    stepping, active = BatchStepper(models, settings), list(range(len(models)))
+    with one_blas_thread():  # as initial_state settles
+        while active:
+            t = relaxations[active[0]].k * settings.dt  # the active members have taken the same steps
+            settled = []
+            for k, result in zip(active, stepping.step(Q, QD, t, holds, active)):
+                if isinstance(result, BaseException):
+                    raise result
+                Q[k] = result.q
+                QD[k], restart, done = relaxations[k].after(result)
+                if restart:  # a step afresh, as start._settle takes it
+                    stepping.members[k].memory = None
+                if done:
+                    settled.append(k)
+            active = [k for k in active if k not in settled]
+    return [(q.copy(), qd.copy()) for q, qd in zip(Q, QD)]

@@ -107,33 +107,49 @@ def initial_state(model: Model, reference, settings: StepSettings = StepSettings
     qd = np.zeros(model.nv)
     if settle:
         with one_blas_thread():  # as simulate steps: the same start in a script as on the command line
-            q, qd = _settle(make_stepper(stepper, model, settings), q, qd, _Hold(reference(0.0)[0]))
+            q, qd = _settle(make_stepper(stepper, model, settings), q, qd, Hold(reference(0.0)[0]))
     return q, qd
 
 
 def _settle(stepper, q, qd, hold):
     """(q, qd) after the dynamic relaxation of the module docstring, stepped by ``stepper`` with
     the joints holding ``hold``."""
-    dt = stepper.settings.dt
-    least, most = int(round(SETTLE_TIME / dt)), int(round(SETTLE_MAX / dt))
-    still, calm = int(round(SETTLE_STILL / dt)), 0  # steps in a row below SETTLE_SPEED
-    peak = 0.0  # the kinetic energy at the start of the last step
-    for k in range(most):
-        result = stepper.step(q, qd, k * dt, hold)
-        q, qd = result.q, result.qd
-        # kinetic damping: the energy has passed a peak, so stop every coordinate (and start
-        # the next step afresh: no velocity memory, as on a first step)
-        if result.kinetic < peak:
-            qd, stepper.memory, peak = np.zeros_like(qd), None, 0.0
+    relaxation = Relaxation(stepper.settings.dt)
+    while True:
+        result = stepper.step(q, qd, relaxation.k * stepper.settings.dt, hold)
+        q = result.q
+        qd, restart, settled = relaxation.after(result)
+        if restart:  # a step afresh: no velocity memory, as on a first step
+            stepper.memory = None
+        if settled:
+            return q, qd
+
+
+class Relaxation:
+    """The dynamic relaxation of the module docstring, one step at a time: ``after`` takes a step's
+    result and says what the next step starts from; ``k`` counts the steps taken."""
+
+    def __init__(self, dt: float):
+        self.least, self.most = int(round(SETTLE_TIME / dt)), int(round(SETTLE_MAX / dt))
+        self.still, self.calm = int(round(SETTLE_STILL / dt)), 0  # steps in a row below SETTLE_SPEED
+        self.peak = 0.0  # the kinetic energy at the start of the last step
+        self.k = 0
+
+    def after(self, result) -> tuple:
+        """(qd, restart, settled) after the step ``result``: its velocity, or zero with restart True
+        where the kinetic energy has passed a peak (kinetic damping: every coordinate stops); settled
+        once the scene has been still long enough, or after the most steps allowed."""
+        qd, restart = result.qd, False
+        if result.kinetic < self.peak:
+            qd, restart, self.peak = np.zeros_like(qd), True, 0.0
         else:
-            peak = result.kinetic
-        calm = calm + 1 if np.abs(qd).max() < SETTLE_SPEED else 0
-        if k + 1 >= least and calm >= still:
-            break
-    return q, qd
+            self.peak = result.kinetic
+        self.calm = self.calm + 1 if np.abs(qd).max() < SETTLE_SPEED else 0
+        self.k += 1
+        return qd, restart, (self.k >= self.least and self.calm >= self.still) or self.k >= self.most
 
 
-class _Hold:
+class Hold:
     """A reference that holds the joint angles q_0: (q_0, 0, 0) at every time."""
 
     def __init__(self, q0):

@@ -7,7 +7,7 @@ from cobra_ref.fast.stepper import FastStepper
 from cobra_ref.gaits import RollingGait, gait
 from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import simulate
-from cobra_ref.start import SETTLE_SPEED, BoxPlacement, _Hold, initial_state, placed_state
+from cobra_ref.start import SETTLE_SPEED, BoxPlacement, Hold, initial_state, placed_state
 from cobra_ref.step import SimulationError, StepSettings, step
 
 
@@ -192,7 +192,7 @@ def test_the_start_is_settled_every_loaded_sphere_on_the_ground_and_at_rest(name
     ground = result.contacts.kind == 0
     assert (loaded & ground).sum() >= 3
     assert np.all(result.contacts.g[loaded] > -1e-4) and np.all(result.contacts.g[loaded] < 1e-6)
-    stepper, hold, q0 = FastStepper(model, settings), _Hold(gait(name)(0.0)[0]), q.copy()
+    stepper, hold, q0 = FastStepper(model, settings), Hold(gait(name)(0.0)[0]), q.copy()
     for k in range(500):
         res = stepper.step(q, qd, k * settings.dt, hold)
         q, qd = res.q, res.qd
@@ -221,7 +221,7 @@ def test_kinetic_damping_reaches_the_undamped_rest_sooner(monkeypatch):
     q, qd = initial_state(model, ref, settings)
     # the plain model: held in its start shape, stepped 3 s; when it first met the rest rule
     q_plain, qd_plain = placed_state(model, ref), np.zeros(model.nv)
-    stepper, hold = FastStepper(model, settings), _Hold(ref(0.0)[0])
+    stepper, hold = FastStepper(model, settings), Hold(ref(0.0)[0])
     calm, plain_steps = 0, None
     for k in range(3000):
         res = stepper.step(q_plain, qd_plain, k * settings.dt, hold)

@@ -7,7 +7,7 @@ strike can converge for one member and not for another. ``members_study`` runs t
 members of the figures' ensemble of one gait (``regenerate.ensemble_specs`` with the figures'
 parameters; member 0 is the figure run) for ``duration`` at each dt with the figures' setting
 (compliant contact, position servo), every dt from the member's figure start (placed and settled
-as the figure runs are, ``runs.figure_start``), so that only the step differs. The members of one dt are
+as the figure runs are, ``runs.figure_starts``), so that only the step differs. The members of one dt are
 advanced as one batch (:mod:`cobra_ref.batch`; each its single run, bit for bit) and measured by
 ``convergence.metrics``.
 """
@@ -20,7 +20,7 @@ from dataclasses import replace
 from ..batch import simulate_batch
 from ..step import StepSettings
 from .convergence import DTS, changes, metrics
-from .runs import figure_start
+from .runs import figure_starts
 
 
 def figure_members(gait_name: str, n_members: int, duration: float) -> list:
@@ -39,8 +39,7 @@ def members_study(gait_name: str, n_members: int, duration: float = 2.0, dts=DTS
     """{dt: [metrics of each member]} of the figures' first ``n_members`` runs of ``gait_name``
     (module docstring); a member whose run fails has its ``error`` in its row (its metrics are of
     the steps it took)."""
-    models, references, initial, _ = zip(*(figure_start(spec) for spec in figure_members(gait_name, n_members,
-                                                                                         duration)))
+    models, references, initial, _ = zip(*figure_starts(figure_members(gait_name, n_members, duration)))
     out = {}
     for dt in dts:
         clock = time.perf_counter()

@@ -57,9 +57,9 @@ from ..placement import travel_placement
 from ..infra.progress import end_line, progress_printer, rewrite
 from ..infra.validation import DEFAULT_DT, check
 from ..robots import cobra_model
-from ..batch import simulate_batch
+from ..batch import initial_states, simulate_batch
 from ..simulate import LeftPhysicsWarning, left_physics, simulate
-from ..start import BoxPlacement, initial_state
+from ..start import BoxPlacement
 from ..step import SimulationError, StepSettings
 from ..trajectory import Trajectory
 from .cache import read_trajectory, seal_trajectory, verified
@@ -70,7 +70,6 @@ PLACEMENTS = ("per gait", "travel")  # the box placement rules: A9 (A31 for side
 # runs advanced together in one task (``batches``; ``cobra_ref.batch``, faster per run in larger batches):
 BATCH_SIZE = 16  # on an executor whose workers are not known (a cluster: more tasks than workers)
 POOL_BATCH = 48  # at most, on our own pool of known workers (each member holds its log in memory: docs/results.md)
-
 
 
 @dataclass(frozen=True)
@@ -174,15 +173,15 @@ def nominal_placement(spec: RunSpec):
     ``spec``: its gait parameters and frictions without the member's perturbation, so every member
     starts from the same placement before its own shift and turn.
 
-    ``simulate_spec``; computed once per process for each nominal run (a box-free run).
+    ``simulate_spec``; once per process per gait, parameters and dt (a box-free run: no box enters it).
     """
     nominal = replace(spec, member=None)
-    return _placement(nominal.gait, json.dumps(nominal.params, sort_keys=True), nominal.dt, nominal.mu_robot_box)
+    return _placement(nominal.gait, json.dumps(nominal.params, sort_keys=True), nominal.dt)
 
 
 @functools.lru_cache(maxsize=None)
-def _placement(gait_name: str, params_json: str, dt: float, mu_robot_box):
-    spec = RunSpec(gait_name, dt=dt, params=json.loads(params_json), mu_robot_box=mu_robot_box)
+def _placement(gait_name: str, params_json: str, dt: float):
+    spec = RunSpec(gait_name, dt=dt, params=json.loads(params_json))
     return travel_placement(cobra_model(spec.cobra_parameters(), with_box=False), spec.reference(), dt)
 
 
@@ -207,7 +206,7 @@ def simulate_specs(specs, progress=None) -> list:
     """``simulate_spec`` of each of ``specs`` (one ``batch_key``), their runs advanced together as
     one batch (:mod:`cobra_ref.batch`: each the same steps, bit for bit, as its own run):
     [(trajectory, failed)] in order."""
-    models, references, starts, placements = zip(*(figure_start(spec) for spec in specs))
+    models, references, starts, placements = zip(*figure_starts(specs))
     trajectories = simulate_batch(list(models), references, specs[0].duration, StepSettings(dt=specs[0].dt), starts,
                                   progress)
     out = []
@@ -228,15 +227,23 @@ def batch_key(spec: RunSpec) -> tuple:
 def figure_start(spec: RunSpec):
     """(model, reference, (q0, qd0), placement) of ``spec``: its placed and settled start (``simulate_spec``);
     placement is the travelling rule's (``nominal_placement``), None for a box placed by A9."""
-    model = cobra_model(spec.cobra_parameters(), with_box=True)
-    ref = spec.reference()
-    placement = nominal_placement(spec) if spec.travels else None
-    direction = None if placement is None else placement.direction
-    member = spec.member
-    start = initial_state(model, ref, placement=BoxPlacement(
-        gap=0.05 if placement is None else placement.box_gap, direction=direction,
-        shift=None if member is None else member.box_shift, turn=0.0 if member is None else member.box_turn))
-    return model, ref, start, placement
+    return figure_starts([spec])[0]
+
+
+def figure_starts(specs) -> list:
+    """``figure_start`` of each of ``specs`` (one ``batch_key``), their starts settled together
+    (``batch.initial_states``: each member's ``start.initial_state``, bit for bit)."""
+    models, references, boxes, placements = zip(*(_figure_setup(spec) for spec in specs))
+    return list(zip(models, references, initial_states(models, references, boxes), placements))
+
+
+def _figure_setup(spec: RunSpec):
+    """(model, reference, box placement, travelling placement or None) of ``spec`` (``figure_start``)."""
+    placement, member = (nominal_placement(spec) if spec.travels else None), spec.member
+    box = BoxPlacement(gap=0.05 if placement is None else placement.box_gap,
+                       direction=None if placement is None else placement.direction,
+                       shift=None if member is None else member.box_shift, turn=0.0 if member is None else member.box_turn)
+    return cobra_model(spec.cobra_parameters(), with_box=True), spec.reference(), box, placement
 
 
 def _annotate(traj: Trajectory, spec: RunSpec, ref, placement) -> None:
