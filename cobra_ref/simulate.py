@@ -217,6 +217,7 @@ class RunLog:
         self.q = np.zeros((n_steps + 1, model.nq))
         self.qd = np.zeros((n_steps + 1, model.nv))
         self.tau = np.zeros((n_steps, len(self.joints.v)))
+        self.q_ref = np.zeros((n_steps, len(self.joints.q)))  # each step's joint reference
         self.steps = {k: np.zeros(n_steps) for k in STEP_KEYS}
         self.contact_rows = {k: [] for k in CONTACT_KEYS}
         self.box = model.q_idx[model.boxes[0].body] if model.boxes else None
@@ -227,7 +228,7 @@ class RunLog:
         self.t[i], self.q[i], self.qd[i] = t, q, qd
 
     def add_step(self, k, res):
-        s, info, cs, joints = self.steps, res.info, res.contacts, self.joints
+        s, info, cs = self.steps, res.info, res.contacts
         s["fp_converged"][k], s["fp_iter"][k] = info.converged, info.iterations
         s["qp_iter"][k], s["qp_solves"][k] = info.qp_iterations, info.qp_solves
         for key in ("coulomb_residual", "complementarity", "cone_residual"):
@@ -236,14 +237,7 @@ class RunLog:
         s["n_contacts"][k] = cs.m
         p_N = res.p[0::3]
         s["max_normal_force"][k] = float(p_N.max()) / self.dt if cs.m else 0.0
-        if len(joints.v):
-            q_joint = res.q[joints.q]
-            s["tau_excess"][k] = float((np.abs(res.tau) - joints.tau_max).max())
-            s["q_excess"][k] = float((np.abs(q_joint) - joints.q_max).max())
-            s["qd_excess"][k] = float((np.abs(res.qd[joints.v]) - joints.qd_max).max())
-            s["tracking_error"][k] = float(np.abs(q_joint - res.q_ref).max())
-        else:
-            s["tau_excess"][k] = s["q_excess"][k] = s["qd_excess"][k] = -np.inf
+        self.q_ref[k] = res.q_ref  # the joints' limits and tracking error follow at ``finish``
         for key in ("kinetic", "potential", "elastic", "work_actuators", "work_contacts"):
             s[key][k] = getattr(res, key)
         self.tau[k] = res.tau
@@ -275,8 +269,23 @@ class RunLog:
             rows["contact_gap_end"].append(g + self.dt * res.w[0::3][active])
         self.n = k + 1
 
+    def _joint_excess(self, n: int) -> None:
+        """Each of the first n steps' torque, angle and rate beyond the joints' limits (-inf without
+        joints) and its largest tracking error, from the state after it and its reference."""
+        s, joints = self.steps, self.joints
+        if not len(joints.v):
+            for key in ("tau_excess", "q_excess", "qd_excess"):
+                s[key][:n] = -np.inf
+            return
+        q_joint = self.q[1:n + 1, joints.q]
+        s["tau_excess"][:n] = (np.abs(self.tau[:n]) - joints.tau_max).max(axis=1, initial=-np.inf)
+        s["q_excess"][:n] = (np.abs(q_joint) - joints.q_max).max(axis=1, initial=-np.inf)
+        s["qd_excess"][:n] = (np.abs(self.qd[1:n + 1, joints.v]) - joints.qd_max).max(axis=1, initial=-np.inf)
+        s["tracking_error"][:n] = np.abs(q_joint - self.q_ref[:n]).max(axis=1, initial=-np.inf)
+
     def finish(self, wall_time: float, error: str = "", meta: dict | None = None) -> Trajectory:
         n = self.n
+        self._joint_excess(n)
         shapes = {"contact_point": (0, 3), "contact_normal": (0, 3), "contact_force": (0, 3)}
         contacts = {k: (np.concatenate(v) if v else np.zeros(shapes.get(k, (0,)))) for k, v in self.contact_rows.items()}
         box_pose = self.q[:n + 1, self.box] if self.box is not None else np.zeros((n + 1, 7))
