@@ -296,3 +296,15 @@ def test_the_figure_draws_whichever_comparison_there_is(which, tmp_path, monkeyp
     paths = fig_module.make(rows, str(tmp_path))
     assert sorted(p.rsplit(".", 1)[1] for p in paths) == ["pdf", "png"]
     assert len(drawn["fig"].axes) == len(rows)
+
+
+def test_a_non_finite_state_is_named_by_the_step_that_left_it():
+    """The check every DIVERGENCE_CHECK steps reads only the states since the last one: a NaN in the
+    state after step 149 (row 150) is found by the check at step 199, which reads rows 101-200, and
+    named as step 149, as a check of every row from the start names it."""
+    qpos = np.zeros((301, 3))
+    qpos[150:] = np.nan  # MuJoCo keeps stepping a NaN state
+    with pytest.raises(mc.MujocoRolloutError, match=r"diverged at step 149, t = 0\.1490 s"):
+        mc._check_diverged(None, None, qpos, 199, 1e-3, since=100)
+    with pytest.raises(mc.MujocoRolloutError, match=r"diverged at step 149\b"):
+        mc._check_diverged(None, None, qpos, 299, 1e-3)  # from the start: the same first step

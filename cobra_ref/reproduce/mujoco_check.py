@@ -155,7 +155,7 @@ def rollout(model: Model, reference, q0, duration: float, timestep: float = TIME
             contacts += d.ncon
             penetration = max(penetration, -float(d.contact.dist[:d.ncon].min()))
         if (k + 1) % DIVERGENCE_CHECK == 0 or k + 1 == n:
-            _check_diverged(mujoco, d, qpos, k, timestep)
+            _check_diverged(mujoco, d, qpos, k, timestep, (k // DIVERGENCE_CHECK) * DIVERGENCE_CHECK)
     return MujocoRollout(t=t, qpos=qpos, max_penetration=penetration, mean_contacts=contacts / max(n, 1),
                          max_tracking_error=float(np.abs(qpos[:-1, hinge_q] - q_refs).max(initial=0.0)),
                          max_joint_torque=float(np.abs(forces).max(initial=0.0)),
@@ -165,13 +165,14 @@ def rollout(model: Model, reference, q0, duration: float, timestep: float = TIME
 DIVERGENCE_CHECK = 100  # [steps] how often a rollout checks its state for NaN or an unstable-simulation warning
 
 
-def _check_diverged(mujoco, d, qpos, k: int, timestep: float) -> None:
+def _check_diverged(mujoco, d, qpos, k: int, timestep: float, since: int = 0) -> None:
     """Raise ``MujocoRolloutError`` naming the first step that left a non-finite state in
-    ``qpos[:k + 2]``, or, when MuJoCo reported a bad position, velocity or acceleration (it then
-    resets the state and goes on), the check's step k by which it happened."""
-    bad = np.flatnonzero(~np.isfinite(qpos[:k + 2]).all(axis=1))
+    ``qpos[since + 1:k + 2]`` (the states after the last check, which found ``qpos[:since + 1]`` finite),
+    or, when MuJoCo reported a bad position, velocity or acceleration (it then resets the state and
+    goes on), the check's step k by which it happened."""
+    bad = np.flatnonzero(~np.isfinite(qpos[since + 1:k + 2]).all(axis=1))
     if len(bad):
-        j = int(bad[0]) - 1
+        j = since + int(bad[0])
         raise MujocoRolloutError(f"MuJoCo diverged at step {j}, t = {j * timestep:.4f} s (timestep {timestep:g} s)")
     unstable = [name for name in ("BADQPOS", "BADQVEL", "BADQACC") if d.warning[getattr(mujoco.mjtWarning, f"mjWARN_{name}")].number]
     if unstable:
