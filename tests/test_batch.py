@@ -72,6 +72,15 @@ def test_starts_settled_together_are_each_members_own_start_bit_for_bit():
         np.testing.assert_array_equal(qd0, alone[1])
 
 
+def test_starts_of_a_batch_need_a_model_reference_and_placement_each():
+    model, ref = cobra_model(), gait("C")
+    with pytest.raises(ValueError, match="as many models, references and placements, got 1, 2 and 1"):
+        initial_states([model], [ref, ref], [BoxPlacement()])
+    with pytest.raises(TypeError, match="placement"):
+        initial_states([model], [ref], [(0.1, 0.0)])
+    assert initial_states([], [], []) == []
+
+
 @pytest.mark.slow
 def test_every_member_of_a_batch_takes_its_single_runs_steps_bit_for_bit():
     model, references, starts = _members()
