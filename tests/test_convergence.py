@@ -56,6 +56,24 @@ def test_changes_are_relative_from_each_dt_to_the_next_smaller():
     np.testing.assert_allclose(ch["a"], [0.2, 0.05])
 
 
+def test_richardson_recovers_the_limit_and_order_of_a_second_order_error():
+    # sidewinding's 2 s box at dt = 1, 0.5, 0.25 ms [mm]; x(dt) = 13.3 - 0.9 dt^2 (dt in ms) is exactly second order
+    exact = {dt: {"box": 13.3 - 0.9 * (dt * 1e3) ** 2, "jumps": j, "seconds": 1.0}
+             for dt, j in ((2e-3, 3.0), (1e-3, 5.0), (5e-4, 4.0), (2.5e-4, 4.5))}
+    fit = cv.richardson(exact)
+    assert fit["box"][0] == pytest.approx(2.0, abs=1e-9) and fit["box"][1] == pytest.approx(13.3, abs=1e-12)
+    # the three finest go up, down: no order, no limit
+    assert all(np.isnan(v) for v in fit["jumps"])
+    # a first-order sequence, 10 - 2 dt: order 1, its limit; a peak growing like 1 / dt: no limit
+    first = cv.richardson({dt: {"a": 10 - 2e3 * dt, "b": 1 / dt} for dt in (1e-3, 5e-4, 2.5e-4)})
+    assert first["a"] == pytest.approx((1.0, 10.0)) and first["b"][0] < 0 and np.isnan(first["b"][1])
+    # dt that do not halve: nothing to say
+    assert all(np.isnan(v) for v in cv.richardson({dt: {"a": dt} for dt in (3e-3, 1e-3, 5e-4)})["a"])
+    table = cv.format_table({"high-fidelity": exact}, "sidewinding").splitlines()
+    assert table[1].split()[-2:] == ["order", "limit"]
+    assert table[2].split()[-2:] == ["2.00", "13.3"] and table[3].split()[-2:] == ["-", "-"]
+
+
 @pytest.fixture(scope="module")
 def tiny_study():
     return cv.study("C", duration=0.02, dts=(2e-3, 1e-3), settings=("high-fidelity",))
@@ -82,6 +100,9 @@ def test_the_command_prints_the_table_and_writes_json(tmp_path, capsys):
     record = json.loads(out.read_text())
     assert record["gait"] == "C" and set(record["results"]) == {"rigid"}
     assert len(record["results"]["rigid"]) == len(cv.DTS)
+    # each metric's observed order and limit, as the table's last two columns
+    assert set(record["richardson"]["rigid"]) == set(record["changes"]["rigid"])
+    assert set(record["richardson"]["rigid"]["box_displacement"]) == {"order", "limit"}
     assert "rigid (rigid + prescribed)" in capsys.readouterr().out
 
 

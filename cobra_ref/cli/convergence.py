@@ -13,7 +13,7 @@ from .common import c_stdout_silenced, check_out, fail, write_text_atomic
 def cmd_convergence(args) -> int:
     """Run the study (of the figures' members with ``--members``), print its table, write it as JSON.
     """
-    from ..reproduce.convergence import DTS, SETTINGS, changes, check_restart, format_table, study
+    from ..reproduce.convergence import DTS, SETTINGS, changes, check_restart, format_table, richardson, study
 
     if args.json is not None:
         check_out(args.json, "--json")
@@ -38,7 +38,9 @@ def cmd_convergence(args) -> int:
     if args.json is not None:
         record = {"gait": args.gait, "duration": args.duration, "restart": args.restart,
                   "results": {name: {str(dt): row for dt, row in rows.items()} for name, rows in result.items()},
-                  "changes": {name: changes(rows) for name, rows in result.items()}}
+                  "changes": {name: changes(rows) for name, rows in result.items()},
+                  "richardson": {name: {k: {"order": p, "limit": lim} for k, (p, lim) in richardson(rows).items()}
+                                 for name, rows in result.items()}}
         write_text_atomic(args.json, json.dumps(record, indent=1) + "\n", "--json")
         print(f"wrote {args.json}")
     return 0
@@ -69,7 +71,8 @@ def add_parsers(sub) -> None:
                                    "setting (compliant contact, position servo) and the rigid one (rigid contact, "
                                    "prescribed joints), and prints per dt: contact force peaks (raw, 2 ms mean, "
                                    "99th percentile), torque and power peaks, the box's displacement and impacts "
-                                   "per second.")
+                                   "per second; then each one's observed order of convergence and Richardson limit "
+                                   "from the three finest dt ('-' where they do not approach one).")
     p.add_argument("--gait", default="J", choices=tuple(GAITS), help="the gait (default J)")
     p.add_argument("--duration", type=RULES["study_duration"].arg("--duration"), default=2.0,
                    help="simulated time per run [s] (default 2)")

@@ -15,7 +15,8 @@ measures what the paper's figures show:
 
 An impulsive model shows itself here: its peaks grow like 1 / dt (a velocity jump takes one
 step whatever its length), a non-impulsive one's converge. ``changes`` reports each metric's
-relative change between successive dt.
+relative change between successive dt, ``richardson`` its observed order of convergence and the
+limit it tends to.
 
 ``restart`` = T > 0 separates what the steps after T do from the error carried to T: every dt
 starts at T from the one state the finest dt reached there (local convergence, against the
@@ -157,16 +158,39 @@ def changes(rows: dict) -> dict:
             for k in keys}
 
 
+def richardson(rows: dict) -> dict:
+    """{metric: (p, limit)} of one setting's rows from its three finest dt, each half the last: the
+    observed order p = log2((x_1 - x_2) / (x_2 - x_3)) and the Richardson limit
+    x_3 + (x_3 - x_2) / (2^p - 1) of x(dt) = limit - C dt^p; (nan, nan) where the three do not
+    change monotonically towards a limit (p <= 0, or differences of opposite sign or zero).
+    """
+    dts = sorted(rows, reverse=True)[-3:]
+    if len(dts) < 3 or not (dts[0] == 2 * dts[1] == 4 * dts[2]):
+        return {k: (float("nan"), float("nan")) for k in changes(rows)}
+    out = {}
+    for k in changes(rows):
+        x1, x2, x3 = (rows[dt][k] for dt in dts)
+        d12, d23 = x2 - x1, x3 - x2
+        p = float(np.log2(d12 / d23)) if d12 * d23 > 0 else float("nan")
+        out[k] = (p, x3 + d23 / (2.0**p - 1.0)) if p > 0 else (p, float("nan"))
+    return out
+
+
 def format_table(result: dict, gait_name: str, restart: float = 0.0) -> str:
-    """The study as a text table: one block per setting, one column per dt.
+    """The study as a text table: one block per setting, one column per dt, then each metric's
+    observed order and Richardson limit from the three finest dt (``richardson``; "-" where none).
     """
     lines = []
     for name, rows in result.items():
         dts = sorted(rows, reverse=True)
         since = f", every dt from the dt = {min(dts) * 1e3:g} ms state at t = {restart:g} s" if restart > 0 else ""
         lines.append(f"{gait_name}, {name} ({' + '.join(SETTINGS[name])}){since}")
-        lines.append(f"  {'dt [ms]':<24}" + "".join(f"{dt * 1e3:>10g}" for dt in dts))
+        lines.append(f"  {'dt [ms]':<24}" + "".join(f"{dt * 1e3:>10g}" for dt in dts) + f"{'order':>8}{'limit':>10}")
+        fits = richardson(rows)
         for key in rows[dts[0]]:
             if key != "seconds":
-                lines.append(f"  {key:<24}" + "".join(f"{rows[dt][key]:>10.4g}" for dt in dts))
+                p, limit = fits.get(key, (float("nan"), float("nan")))
+                lines.append(f"  {key:<24}" + "".join(f"{rows[dt][key]:>10.4g}" for dt in dts)
+                             + (f"{p:>8.2f}" if np.isfinite(p) else f"{'-':>8}")
+                             + (f"{limit:>10.4g}" if np.isfinite(limit) else f"{'-':>10}"))
     return "\n".join(lines)
