@@ -278,10 +278,10 @@ class RunLog:
                 s[key][:n] = -np.inf
             return
         q_joint = self.q[1:n + 1, joints.q]
-        s["tau_excess"][:n] = (np.abs(self.tau[:n]) - joints.tau_max).max(axis=1, initial=-np.inf)
-        s["q_excess"][:n] = (np.abs(q_joint) - joints.q_max).max(axis=1, initial=-np.inf)
-        s["qd_excess"][:n] = (np.abs(self.qd[1:n + 1, joints.v]) - joints.qd_max).max(axis=1, initial=-np.inf)
-        s["tracking_error"][:n] = np.abs(q_joint - self.q_ref[:n]).max(axis=1, initial=-np.inf)
+        s["tau_excess"][:n] = (np.abs(self.tau[:n]) - joints.tau_max).max(axis=1)
+        s["q_excess"][:n] = (np.abs(q_joint) - joints.q_max).max(axis=1)
+        s["qd_excess"][:n] = (np.abs(self.qd[1:n + 1, joints.v]) - joints.qd_max).max(axis=1)
+        s["tracking_error"][:n] = np.abs(q_joint - self.q_ref[:n]).max(axis=1)
 
     def finish(self, wall_time: float, error: str = "", meta: dict | None = None) -> Trajectory:
         n = self.n

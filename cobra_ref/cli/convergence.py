@@ -41,8 +41,7 @@ def cmd_convergence(args) -> int:
                   "changes": {name: changes(rows) for name, rows in result.items()},
                   "richardson": {name: {k: {"order": p, "limit": lim} for k, (p, lim) in richardson(rows).items()}
                                  for name, rows in result.items()}}
-        write_text_atomic(args.json, json.dumps(record, indent=1) + "\n", "--json")
-        print(f"wrote {args.json}")
+        _write_json(args.json, record)
     return 0
 
 
@@ -56,9 +55,14 @@ def _members(args, say) -> int:
     if args.json is not None:
         record = {"gait": args.gait, "duration": args.duration, "members": args.members,
                   "results": {str(dt): rows for dt, rows in result.items()}, "changes": member_changes(result)}
-        write_text_atomic(args.json, json.dumps(record, indent=1) + "\n", "--json")
-        print(f"wrote {args.json}")
+        _write_json(args.json, record)
     return 0
+
+
+def _write_json(path: str, record: dict) -> None:
+    """``--json``: the study's record written atomically to exactly ``path``, and said so."""
+    write_text_atomic(path, json.dumps(record, indent=1) + "\n", "--json")
+    print(f"wrote {path}")
 
 
 def add_parsers(sub) -> None:

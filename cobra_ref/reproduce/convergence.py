@@ -164,11 +164,11 @@ def richardson(rows: dict) -> dict:
     x_3 + (x_3 - x_2) / (2^p - 1) of x(dt) = limit - C dt^p; (nan, nan) where the three do not
     change monotonically towards a limit (p <= 0, or differences of opposite sign or zero).
     """
-    dts = sorted(rows, reverse=True)[-3:]
+    dts, keys = sorted(rows, reverse=True)[-3:], list(changes(rows))
     if len(dts) < 3 or not (dts[0] == 2 * dts[1] == 4 * dts[2]):
-        return {k: (float("nan"), float("nan")) for k in changes(rows)}
+        return {k: (float("nan"), float("nan")) for k in keys}
     out = {}
-    for k in changes(rows):
+    for k in keys:
         x1, x2, x3 = (rows[dt][k] for dt in dts)
         d12, d23 = x2 - x1, x3 - x2
         p = float(np.log2(d12 / d23)) if d12 * d23 > 0 else float("nan")
