@@ -21,7 +21,7 @@ PHYSICS_MODULES = (
     "spatial.py", "quaternion.py", "joints.py", "model.py", "params.py", "robots.py", "kinematics.py",
     "dynamics.py", "gaps.py", "contact.py", "compliance.py", "qp.py", "least_action.py", "coulomb_newton.py",
     "step.py", "steppers.py", "start.py", "placement.py", "simulate.py", "gaits.py", "reference.py",
-    "trajectory.py",
+    "trajectory.py", "touchdown.py",
     "fast/chain.py", "fast/contacts.py", "fast/gaps.py", "fast/least_action.py", "fast/active_set.py",
     "fast/stepper.py", "batch.py", "fast/batch.py", "fast/members.py", "fast/newton_batch.py",
     "fast/problem_batch.py", "fast/iterate_batch.py", "fast/box_batch.py",

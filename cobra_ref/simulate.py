@@ -26,11 +26,10 @@ from .infra.executors import one_blas_thread
 from .model import Model
 from .qp import ContactSolveError
 from .start import check_run_arguments, initial_state
-from .step import SimulationError, StepSettings, joint_coordinates
+from .step import IMPACT_SPEED, SimulationError, StepSettings, joint_coordinates
 from .steppers import make_stepper
 from .trajectory import CONTACT_KEYS, STEP_KEYS, Trajectory
 
-IMPACT_SPEED = 0.01  # [m/s] a contact that starts carrying load while approaching faster is an impact (A26)
 MAX_START_PENETRATION = 0.005  # [m] a start deeper in the ground or the box is refused
 CONTACT_FORCE_WEIGHTS = 30.0  # the bound on a contact's normal force, in weights of every body (A32)
 

@@ -61,24 +61,30 @@ class StepSettings:
     ``dt`` [s] (assumption A14; default ``DEFAULT_DT``); ``contact``: ``"compliant"`` (the
     paper's high-fidelity spring-damper contact, A12-A13) or ``"rigid"`` (eq. (2)-(6) as written,
     A15); ``servo``: ``"position"`` (the paper's position-controlled joints, A7) or
-    ``"prescribed"``; ``margin`` [m]: candidate contacts are those with a gap below it. The step
-    reads the law and the servo as objects, ``law`` and ``joint_servo``, resolved from the names.
+    ``"prescribed"``; ``margin`` [m]: candidate contacts are those with a gap below it;
+    ``touchdown_substeps``: n > 1 takes the steps around a contact's touch-down as n steps of
+    dt / n (A33, :mod:`cobra_ref.touchdown`; the steppers of ``steppers.make_stepper``, not the
+    batched engine). The step reads the law and the servo as objects, ``law`` and ``joint_servo``,
+    resolved from the names.
     """
 
     dt: float = DEFAULT_DT
     contact: str = "compliant"
     servo: str = "position"
     margin: float = 0.01
+    touchdown_substeps: int = 1
 
     def __post_init__(self):
         """Check every setting by its rule (:mod:`cobra_ref.infra.validation`): dt within
-        [DT_MIN, DT_MAX] (A14), a known contact law and servo, a margin in [0, 1] m; a
+        [DT_MIN, DT_MAX] (A14), a known contact law and servo, a margin in [0, 1] m, a whole number
+        of touch-down substeps in [1, 16]; a
         ``ValidationError`` (a ValueError) names the field, the value and the allowed range; a value
         that is not a number is an ``infra.arguments.ArgumentTypeError`` (a TypeError)."""
         arguments.number("dt", self.dt, RULES["dt"])
         check_choice("contact", self.contact, LAWS)
         check_choice("servo", self.servo, SERVOS)
         arguments.number("margin", self.margin, RULES["margin"])
+        arguments.number("touchdown_substeps", self.touchdown_substeps, RULES["touchdown_substeps"])
 
     @property
     def law(self):
@@ -307,6 +313,9 @@ def midpoint_velocity(qd: np.ndarray, previous: dict | None) -> np.ndarray:
     if qd_prev is None or np.shape(qd_prev) != np.shape(qd):
         return qd
     return qd + 0.5 * (qd - qd_prev)
+
+
+IMPACT_SPEED = 0.01  # [m/s] a contact that starts carrying load while approaching faster is an impact (A26)
 
 
 def approach_speed(J_c: np.ndarray, qd) -> np.ndarray:

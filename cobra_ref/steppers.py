@@ -63,6 +63,10 @@ def make_stepper(name: str, model: Model, settings: StepSettings = StepSettings(
     """
     arguments.instance("model", model, Model, "cobra_model()")
     arguments.instance("settings", settings, StepSettings, "StepSettings(dt=0.001)")
+    if settings.touchdown_substeps > 1 and name in STEPPERS:
+        from .touchdown import TouchdownStepper
+
+        return TouchdownStepper(lambda m, s: make_stepper(name, m, s), model, settings)
     if name == "fast":
         from .fast.stepper import FastStepper
 

@@ -78,14 +78,17 @@ def ode_drop(mass: float, v0: float) -> Drop:
     return Drop(float(sol.y_events[1][0][0]), float(sol.t_events[0][0]), float(sol.y_events[0][0][1]))
 
 
-def step_drop(mass: float, v0: float, dt: float, stepper: str = "reference", max_time: float = 0.03):
-    """(Drop, results): the drop on our step at ``dt`` (the compliant law), stepped until AFTER steps
-    past the first contact episode's end (at most ``max_time``: a ball that comes to rest in its
-    first contact has no rebound, NaN); ``results``: every StepResult."""
+def step_drop(mass: float, v0: float, dt: float, stepper: str = "reference", max_time: float = 0.03,
+              substeps: int = 1):
+    """(Drop, results): the drop on our step at ``dt`` (the compliant law; ``substeps``: its
+    touch-down taken in that many substeps, A33), stepped until AFTER steps past the first contact
+    episode's end (at most ``max_time``: a ball that comes to rest in its first contact has no
+    rebound, NaN); ``results``: every StepResult."""
     model = ball(mass=mass)
     z0, v_start = start(v0)
     q, qd = at_height(model, z0, v=(0.0, 0.0, v_start))
-    stepping, results = make_stepper(stepper, model, StepSettings(dt=dt)), []
+    settings = StepSettings(dt=dt, touchdown_substeps=substeps)
+    stepping, results = make_stepper(stepper, model, settings), []
     first = last = None
     for n in range(int(round(max_time / dt))):
         res = stepping.step(q, qd, n * dt, no_joints)

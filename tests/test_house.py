@@ -24,7 +24,7 @@ FLOORS = (
                "compliance", "qp", "coulomb_newton", "least_action", "step", "trajectory", "gaits",
                "reference", "mjcf")),
     ("fast", ("fast",)),
-    ("run", ("steppers", "start", "placement", "simulate", "batch")),
+    ("run", ("touchdown", "steppers", "start", "placement", "simulate", "batch")),
     ("use", ("planning", "viz")),
     ("reproduce", ("reproduce",)),
     ("door", ("cli", "__main__", "")),

@@ -58,6 +58,10 @@ class BatchStepper:
     name = "batch"
 
     def __init__(self, models, settings: StepSettings):
+        if settings.touchdown_substeps > 1:
+            raise ValueError("a batch takes whole steps: touch-down substeps (StepSettings.touchdown_substeps = "
+                             f"{settings.touchdown_substeps}, A33) are taken by the steppers of "
+                             "steppers.make_stepper, one run at a time (simulate)")
         models = list(models)
         if not models:
             raise ValueError("a batch has at least one member")

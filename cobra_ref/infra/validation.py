@@ -59,6 +59,8 @@ RULES = {
     "duration": Rule("duration", "s", 0.0, MAX_STEPS * DT_MAX, low_open=True,
                      why="at most 10^6 steps of the largest dt", note="a whole number of steps of dt, at most 10^6 steps"),
     "margin": Rule("margin", "m", 0.0, 1.0, why="the contact search margin (A16: 1 cm)"),
+    "touchdown_substeps": Rule("touchdown_substeps", "-", 1, 16, kind="int",
+                               why="the substeps of a step around a touch-down (A33; 1: whole steps)"),
     "timestep": Rule("timestep", "s", 1e-6, 2e-3,
                      why="MuJoCo's timestep; MuJoCo integrates the exported stiff contact explicitly, stable below "
                          "about 0.2 ms with the box (docs/mujoco.md, A27)"),
