@@ -63,7 +63,7 @@ class StepSettings:
     A15); ``servo``: ``"position"`` (the paper's position-controlled joints, A7) or
     ``"prescribed"``; ``margin`` [m]: candidate contacts are those with a gap below it;
     ``touchdown_substeps``: n > 1 takes the steps around a contact's touch-down as n steps of
-    dt / n (A33, :mod:`cobra_ref.touchdown`; the steppers of ``steppers.make_stepper``, not the
+    dt / n (A33, :mod:`cobra_ref.touchdown`; the steppers of ``steppers.make_stepper`` and the
     batched engine). The step reads the law and the servo as objects, ``law`` and ``joint_servo``,
     resolved from the names.
     """

@@ -27,7 +27,10 @@ returns one ``StepResult`` of dt (``merged``): the state after the last substep;
 approach speeds, energies and Delassus diagonal of the first; each contact's impulse summed over
 the substeps in the world frame and read in the first substep's frame (a contact within the
 search margin at the step's start: the 1 cm margin holds every contact a step can close); the
-torque's mean and the works' sums, so the energy ledger closes as over whole steps.
+torque's mean and the works' sums, so the energy ledger closes as over whole steps. A batch
+(:mod:`cobra_ref.fast.batch`) takes its members' whole steps together and each member's
+substeps through the member's own ``TouchdownStepper`` (``holding``, ``after_whole``,
+``substepped``), so that each member is its single run, bit for bit.
 """
 
 from __future__ import annotations
@@ -137,17 +140,27 @@ class TouchdownStepper:
 
     def step(self, q, qd, t: float, reference, tau_ext=None) -> StepResult:
         """One step of dt from (q, qd) at time t, sub-stepped around a touch-down (module docstring)."""
-        if self.hold and (self._returned is None or not np.array_equal(qd, self._returned)):
-            self.hold = 0  # started from another state than the one returned: a whole step
+        if self.holding(qd):
+            return self.substepped(q, qd, t, reference, tau_ext, self.whole.memory)
         memory = self.whole.memory
-        if not self.hold:
-            result = self.whole.step(q, qd, t, reference, tau_ext)
-            if not onset(result, memory, self.dt):
-                return result
-            self.whole.memory = memory  # taken again in substeps, from the same memory
-        return self._substepped(q, qd, t, reference, tau_ext, memory)
+        return self.after_whole(self.whole.step(q, qd, t, reference, tau_ext), memory, q, qd, t, reference, tau_ext)
 
-    def _substepped(self, q, qd, t, reference, tau_ext, memory) -> StepResult:
+    def holding(self, qd) -> bool:
+        """Whether the step from qd goes straight to substeps: within the hold after a strike, and
+        from the velocity the last step returned (any other forgets the hold)."""
+        if self.hold and (self._returned is None or not np.array_equal(qd, self._returned)):
+            self.hold = 0
+        return bool(self.hold)
+
+    def after_whole(self, result: StepResult, memory, q, qd, t: float, reference, tau_ext=None) -> StepResult:
+        """The whole step ``result`` (taken from ``memory``), or, where a contact touched down in it
+        (``onset``), the step taken again in substeps from the same state and memory."""
+        if not onset(result, memory, self.dt):
+            return result
+        self.whole.memory = memory
+        return self.substepped(q, qd, t, reference, tau_ext, memory)
+
+    def substepped(self, q, qd, t: float, reference, tau_ext, memory) -> StepResult:
         """The step of dt from (q, qd) at t as n substeps, from the whole step's ``memory`` (or,
         while held, from where the last substep left), merged into one result (module docstring)."""
         dt, n = self.dt, self.n

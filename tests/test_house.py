@@ -21,10 +21,10 @@ PACKAGE = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 FLOORS = (
     ("base", ("provenance", "quaternion", "spatial", "infra")),
     ("model", ("params", "joints", "model", "robots", "kinematics", "dynamics", "gaps", "contact",
-               "compliance", "qp", "coulomb_newton", "least_action", "step", "trajectory", "gaits",
+               "compliance", "qp", "coulomb_newton", "least_action", "step", "touchdown", "trajectory", "gaits",
                "reference", "mjcf")),
     ("fast", ("fast",)),
-    ("run", ("touchdown", "steppers", "start", "placement", "simulate", "batch")),
+    ("run", ("steppers", "start", "placement", "simulate", "batch")),
     ("use", ("planning", "viz")),
     ("reproduce", ("reproduce",)),
     ("door", ("cli", "__main__", "")),

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..model import Model
 from ..step import StepSettings, midpoint_velocity
+from ..touchdown import TouchdownStepper
 from .chain import ChainTerms
 from .contacts import contact_jacobian_batch, find_contacts_batch
 from .iterate_batch import kkt_all, solve_all
@@ -58,24 +59,51 @@ class BatchStepper:
     name = "batch"
 
     def __init__(self, models, settings: StepSettings):
-        if settings.touchdown_substeps > 1:
-            raise ValueError("a batch takes whole steps: touch-down substeps (StepSettings.touchdown_substeps = "
-                             f"{settings.touchdown_substeps}, A33) are taken by the steppers of "
-                             "steppers.make_stepper, one run at a time (simulate)")
         models = list(models)
         if not models:
             raise ValueError("a batch has at least one member")
         if not all(m is models[0] or same_bodies(models[0], m) for m in models[1:]):
             raise ValueError("the members of a batch must have the same bodies, joints and contact geometry")
         self.model, self.settings = models[0], settings
-        self.members = [FastStepper(model, settings) for model in models]
+        # touch-down substeps (A33): each member's whole steps are its TouchdownStepper's, its substeps its own
+        self.touchdowns = None
+        if settings.touchdown_substeps > 1:
+            self.touchdowns = [TouchdownStepper(FastStepper, model, settings) for model in models]
+            self.members = [touchdown.whole for touchdown in self.touchdowns]
+        else:
+            self.members = [FastStepper(model, settings) for model in models]
         self.chain = self.members[0].chain
         self.batched_seconds = 0.0  # the batched parts' time, summed
 
     def step(self, Q: np.ndarray, QD: np.ndarray, t: float, references, active) -> list:
         """One step at time t of the members ``active`` (indices), from their rows of Q (K, nq) and
         QD (K, nv), each following its ``references[k]``: a ``step.StepResult`` per active member,
-        or the exception its step raised (that member's step is then not taken)."""
+        or the exception its step raised (that member's step is then not taken). With touch-down
+        substeps, the members' whole steps are taken together and each member's substeps on its own,
+        as its ``TouchdownStepper`` takes them."""
+        if self.touchdowns is None:
+            return self._whole(Q, QD, t, references, active)
+        held = [k for k in active if self.touchdowns[k].holding(QD[k])]
+        whole = [k for k in active if k not in held]
+        memories = {k: self.members[k].memory for k in whole}
+        results = dict(zip(whole, self._whole(Q, QD, t, references, whole))) if whole else {}
+        out = []
+        for k in active:
+            touchdown, r = self.touchdowns[k], results.get(k)
+            try:
+                if k in results and not isinstance(r, Exception):
+                    r = touchdown.after_whole(r, memories[k], Q[k], QD[k], t, references[k])
+                elif k not in results:
+                    r = touchdown.substepped(Q[k], QD[k], t, references[k], None, self.members[k].memory)
+            except KeyboardInterrupt:
+                raise
+            except Exception as exc:
+                r = exc
+            out.append(r)
+        return out
+
+    def _whole(self, Q: np.ndarray, QD: np.ndarray, t: float, references, active) -> list:
+        """``step`` of whole steps (module docstring)."""
         start = time.perf_counter()
         W = np.stack([midpoint_velocity(QD[k], self.members[k].memory) for k in active])
         terms = self.chain.terms(Q[active], W)
