@@ -104,7 +104,7 @@ class BatchRun:
         its share of the batch's wall time."""
         share = self.wall_time / self.size
         return [log.finish(share, error, meta(model, self.settings, member))
-                for log, error, model, member in zip(self.logs, self.errors, self.models, self.stepping.members)]
+                for log, error, model, member in zip(self.logs, self.errors, self.models, self.stepping.steppers)]
 
 
 def simulate_batch(model, references, duration: float, settings: StepSettings, starts, progress=None) -> list:

@@ -15,6 +15,10 @@ friction fixed point's warm start). Both have the same interface::
   certified QP solves; its ``timing`` has the phases ``fast.stepper.PHASES``. It is imported only
   when asked for, so a reference run never imports the fast wing.
 
+With ``settings.touchdown_substeps`` = n > 1, either kind comes wrapped in a
+:class:`cobra_ref.touchdown.TouchdownStepper`, which takes the steps around a touch-down in n
+substeps (A33) and has the same interface.
+
 ``start.initial_state`` and ``simulate.simulate`` take a stepper *name* and make their own stepper
 with ``make_stepper``, so a run is taken by one kind of stepper from its settle to its last step.
 """
@@ -26,6 +30,7 @@ import time
 from .infra import arguments
 from .model import Model
 from .step import StepResult, StepSettings, step
+from .touchdown import TouchdownStepper
 
 STEPPERS = ("fast", "reference")
 
@@ -64,8 +69,6 @@ def make_stepper(name: str, model: Model, settings: StepSettings = StepSettings(
     arguments.instance("model", model, Model, "cobra_model()")
     arguments.instance("settings", settings, StepSettings, "StepSettings(dt=0.001)")
     if settings.touchdown_substeps > 1 and name in STEPPERS:
-        from .touchdown import TouchdownStepper
-
         return TouchdownStepper(lambda m, s: make_stepper(name, m, s), model, settings)
     if name == "fast":
         from .fast.stepper import FastStepper

@@ -75,6 +75,12 @@ class BatchStepper:
         self.chain = self.members[0].chain
         self.batched_seconds = 0.0  # the batched parts' time, summed
 
+    @property
+    def steppers(self) -> list:
+        """Each member's stepper as its single run has it (its name and timing): its
+        ``TouchdownStepper`` with touch-down substeps, else its ``FastStepper``."""
+        return self.members if self.touchdowns is None else self.touchdowns
+
     def step(self, Q: np.ndarray, QD: np.ndarray, t: float, references, active) -> list:
         """One step at time t of the members ``active`` (indices), from their rows of Q (K, nq) and
         QD (K, nv), each following its ``references[k]``: a ``step.StepResult`` per active member,
