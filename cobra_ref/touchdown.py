@@ -79,19 +79,17 @@ def merged(results: list, dt: float, q, qd, memory: dict) -> StepResult:
     """One step of dt from the substeps ``results`` (module docstring), ending at (q, qd) with
     the whole step's ``memory``."""
     first, last, n = results[0], results[-1], len(results)
-    total, end_gap = {}, {}
+    # each loaded contact's world impulse, summed: the substeps' memories hold them by key (an unloaded
+    # contact carries none, friction included)
+    total = {}
     for r in results:
-        m = r.contacts.m
-        P = np.einsum("kij,kj->ki", r.contacts.frame, r.p[:3 * m].reshape(m, 3))
-        for key, P_k in zip(r.contacts.keys(), P):
+        for key, P_k in r.memory["contacts"].items():
             total[key] = total.get(key, 0.0) + P_k
-    dt_f = dt / n
-    for key, g, w_N in zip(last.contacts.keys(), last.contacts.g, last.w[0::3]):
-        end_gap[key] = g + dt_f * w_N
+    end_gap = {key: g + dt / n * w_N for key, g, w_N in zip(last.contacts.keys(), last.contacts.g, last.w[0::3])}
     m = first.contacts.m
     p, w = first.p.copy(), first.w.copy()
     for i, key in enumerate(first.contacts.keys()):
-        p[3 * i:3 * i + 3] = first.contacts.frame[i].T @ total[key]
+        p[3 * i:3 * i + 3] = first.contacts.frame[i].T @ total.get(key, np.zeros(3))
         if key in end_gap:  # the normal rate that takes the first gap to the last substep's end gap
             w[3 * i] = (end_gap[key] - first.contacts.g[i]) / dt
     p[3 * m:] = np.sum([r.p[3 * r.contacts.m:] for r in results], axis=0)

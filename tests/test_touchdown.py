@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from bodies import at_height, ball, no_joints
-from drops import ode_drop, relative_error, step_drop
+from drops import ode_drop, relative_error, start, step_drop
 from cobra_ref.batch import simulate_batch
-from cobra_ref.simulate import simulate
 from cobra_ref.infra.arguments import ArgumentError, ArgumentTypeError
+from cobra_ref.simulate import simulate
 from cobra_ref.step import StepSettings
 from cobra_ref.steppers import make_stepper
 from cobra_ref.touchdown import HOLD, TouchdownStepper
@@ -99,7 +99,6 @@ def test_a_substepped_step_logs_its_substeps_summed():
     taken = []
     sub_step = stepping.sub.step
     stepping.sub.step = lambda *a: taken.append(sub_step(*a)) or taken[-1]
-    from drops import start
     z0, v = start(0.5)
     q, qd = at_height(model, z0, v=(0.0, 0.0, v))
     checked = 0
@@ -126,7 +125,6 @@ def test_each_member_of_a_batch_substeps_as_its_single_run_bit_for_bit():
     """Three 4 kg balls dropped together at 1 ms with four substeps, their touch-downs at different
     steps (0.2, 0.35 and 0.5 m/s): each member's run is its single run (simulate), bit for bit."""
     model = ball(mass=4.0)
-    from drops import start
     starts = [at_height(model, start(v)[0], v=(0.0, 0.0, start(v)[1])) for v in (0.2, 0.35, 0.5)]
     settings = StepSettings(dt=1e-3, touchdown_substeps=4)
     batch = simulate_batch(model, [no_joints] * 3, 0.02, settings, starts)
