@@ -234,6 +234,7 @@ class RunLog:
             s[key][k] = res.residuals[key]
         s["max_penetration"][k] = max(0.0, -float(cs.g.min())) if cs.m else 0.0
         s["n_contacts"][k] = cs.m
+        s["substeps"][k] = res.substeps
         p_N = res.p[0::3]
         s["max_normal_force"][k] = float(p_N.max()) / self.dt if cs.m else 0.0
         self.q_ref[k] = res.q_ref  # the joints' limits and tracking error follow at ``finish``

@@ -46,6 +46,11 @@ from .least_action import LeastAction, LeastActionInfo, delassus, kkt_residuals,
 from .model import JOINT_NV, Model
 
 
+# A33: a compliant touch-down lasts a few steps of 1 ms and is sub-stepped in two; a rigid one is
+# a velocity jump within one step whatever its size, so the rigid law takes whole steps
+TOUCHDOWN_SUBSTEPS = {"compliant": 2, "rigid": 1}
+
+
 class SimulationError(RuntimeError):
     """A simulation that cannot go on; ``trajectory`` (if set) holds what was computed."""
 
@@ -64,15 +69,16 @@ class StepSettings:
     ``"prescribed"``; ``margin`` [m]: candidate contacts are those with a gap below it;
     ``touchdown_substeps``: n > 1 takes the steps around a contact's touch-down as n steps of
     dt / n (A33, :mod:`cobra_ref.touchdown`; the steppers of ``steppers.make_stepper`` and the
-    batched engine). The step reads the law and the servo as objects, ``law`` and ``joint_servo``,
-    resolved from the names.
+    batched engine); None (the default) is the law's own, ``TOUCHDOWN_SUBSTEPS``, and ``substeps``
+    the n a stepper takes. The step reads the law and the servo as objects, ``law`` and
+    ``joint_servo``, resolved from the names.
     """
 
     dt: float = DEFAULT_DT
     contact: str = "compliant"
     servo: str = "position"
     margin: float = 0.01
-    touchdown_substeps: int = 1
+    touchdown_substeps: int | None = None
 
     def __post_init__(self):
         """Check every setting by its rule (:mod:`cobra_ref.infra.validation`): dt within
@@ -84,7 +90,16 @@ class StepSettings:
         check_choice("contact", self.contact, LAWS)
         check_choice("servo", self.servo, SERVOS)
         arguments.number("margin", self.margin, RULES["margin"])
-        arguments.number("touchdown_substeps", self.touchdown_substeps, RULES["touchdown_substeps"])
+        if self.touchdown_substeps is not None:
+            arguments.number("touchdown_substeps", self.touchdown_substeps, RULES["touchdown_substeps"])
+
+    @property
+    def substeps(self) -> int:
+        """The touch-down substeps n a stepper takes: ``touchdown_substeps``, or the law's
+        (``TOUCHDOWN_SUBSTEPS``, A33) where it is None."""
+        if self.touchdown_substeps is None:
+            return TOUCHDOWN_SUBSTEPS[self.contact]
+        return self.touchdown_substeps
 
     @property
     def law(self):
@@ -118,6 +133,7 @@ class StepResult(NamedTuple):
     work_contacts: float  # x_c . J_c qd_mid: work of the contact impulses [J]
     q_ref: np.ndarray  # (n_joints,) the joints' reference at the end of the step [rad]
     memory: dict  # where the next step's friction fixed point starts (warm_start_memory)
+    substeps: int = 1  # the steps of dt / substeps it was taken in (A33, touchdown.merged; 1: whole)
 
 
 class JointCoordinates(NamedTuple):

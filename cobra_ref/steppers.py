@@ -15,7 +15,7 @@ friction fixed point's warm start). Both have the same interface::
   certified QP solves; its ``timing`` has the phases ``fast.stepper.PHASES``. It is imported only
   when asked for, so a reference run never imports the fast wing.
 
-With ``settings.touchdown_substeps`` = n > 1, either kind comes wrapped in a
+With ``settings.substeps`` = n > 1 (the compliant law's default, A33), either kind comes wrapped in a
 :class:`cobra_ref.touchdown.TouchdownStepper`, which takes the steps around a touch-down in n
 substeps (A33) and has the same interface.
 
@@ -68,7 +68,7 @@ def make_stepper(name: str, model: Model, settings: StepSettings = StepSettings(
     """
     arguments.instance("model", model, Model, "cobra_model()")
     arguments.instance("settings", settings, StepSettings, "StepSettings(dt=0.001)")
-    if settings.touchdown_substeps > 1 and name in STEPPERS:
+    if settings.substeps > 1 and name in STEPPERS:
         return TouchdownStepper(lambda m, s: make_stepper(name, m, s), model, settings)
     if name == "fast":
         from .fast.stepper import FastStepper

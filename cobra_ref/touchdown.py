@@ -1,7 +1,7 @@
 """Touch-downs sub-stepped: the steps around a contact's strike taken as n steps of dt / n.
 
-Implements: assumption A33 (``docs/assumptions.md``), an option of ``StepSettings``
-(``touchdown_substeps`` = n; 1, the default, takes every step whole). On the paper's ground
+Implements: assumption A33 (``docs/assumptions.md``), ``StepSettings.substeps`` = n (by default
+2 for the compliant law, 1, whole steps, for the rigid law). On the paper's ground
 (k = 1e6 N/m, d = 1e3 N s/m) a link's touch-down is over within two or three steps of 1 ms
 (omega dt = 1.4 on a 0.5 kg link), so a step of 1 ms resolves the strike only roughly, and
 where the links of a travelling gait arrive carries that error along (docs/results.md). With
@@ -26,8 +26,13 @@ which keeps a constant acceleration exact (``tests/test_touchdown.py``). A sub-s
 returns one ``StepResult`` of dt (``merged``): the state after the last substep; the contacts,
 approach speeds, energies and Delassus diagonal of the first; each contact's impulse summed over
 the substeps in the world frame and read in the first substep's frame (a contact within the
-search margin at the step's start: the 1 cm margin holds every contact a step can close); the
-torque's mean and the works' sums, so the energy ledger closes as over whole steps. A batch
+search margin at the step's start: the 1 cm margin holds every contact a step can close); each
+contact's normal rate the one that takes its first gap to the smallest gap a substep ends at, so
+that g + dt w_N is closed (at most 0) wherever a substep closed the contact; the torque's mean
+and the works' sums; ``substeps`` = n. The re-reading of the velocity where the step size changes
+is no logged force, so over a sub-stepped stretch the state's momentum and energy change by the
+logged impulses and works plus the re-reads' shifts (each (dt - dt_f) / 2 a); on whole steps
+the ledger closes as before. A batch
 (:mod:`cobra_ref.fast.batch`) takes its members' whole steps together and each member's
 substeps through the member's own ``TouchdownStepper`` (``holding``, ``after_whole``,
 ``substepped``), so that each member is its single run, bit for bit.
@@ -43,6 +48,7 @@ from .least_action import LeastActionInfo
 from .step import IMPACT_SPEED, StepResult
 
 HOLD = 3  # steps still sub-stepped after the last in which a loaded contact approached
+LOADED = 1e-12  # [N s] a normal impulse that carries load (below it, an unloaded contact's QP rounding)
 
 
 def _scaled(memory: dict | None, factor: float, qd_prev: np.ndarray) -> dict | None:
@@ -65,14 +71,15 @@ def onset(result: StepResult, memory_before: dict | None, dt: float) -> bool:
     if not memory_before:
         return striking(result)
     before = memory_before["contacts"]
-    loaded = (result.p[0:3 * m:3] > 0.0).tolist()
+    loaded = (result.p[0:3 * m:3] > LOADED).tolist()
     return any(on and key not in before for key, on in zip(c.keys(), loaded))
 
 
 def striking(result: StepResult) -> bool:
-    """Whether a loaded contact of ``result`` approached faster than ``IMPACT_SPEED``."""
+    """Whether a loaded contact of ``result`` (normal impulse above ``LOADED``) approached faster
+    than ``IMPACT_SPEED``."""
     m = result.contacts.m
-    return bool(np.any(result.approach[result.p[0:3 * m:3] > 0.0] > IMPACT_SPEED))
+    return bool(np.any(result.approach[result.p[0:3 * m:3] > LOADED] > IMPACT_SPEED))
 
 
 def merged(results: list, dt: float, q, qd, memory: dict) -> StepResult:
@@ -85,12 +92,16 @@ def merged(results: list, dt: float, q, qd, memory: dict) -> StepResult:
     for r in results:
         for key, P_k in r.memory["contacts"].items():
             total[key] = total.get(key, 0.0) + P_k
-    end_gap = {key: g + dt / n * w_N for key, g, w_N in zip(last.contacts.keys(), last.contacts.g, last.w[0::3])}
+    # each contact's smallest gap at a substep's end (a contact can close and open again within the step)
+    end_gap = {}
+    for r in results:
+        for key, g, w_N in zip(r.contacts.keys(), r.contacts.g, r.w[0::3]):
+            end_gap[key] = min(end_gap.get(key, np.inf), g + dt / n * w_N)
     m = first.contacts.m
     p, w = first.p.copy(), first.w.copy()
     for i, key in enumerate(first.contacts.keys()):
         p[3 * i:3 * i + 3] = first.contacts.frame[i].T @ total.get(key, np.zeros(3))
-        if key in end_gap:  # the normal rate that takes the first gap to the last substep's end gap
+        if key in end_gap:  # the normal rate that takes the first gap to the smallest end gap
             w[3 * i] = (end_gap[key] - first.contacts.g[i]) / dt
     p[3 * m:] = np.sum([r.p[3 * r.contacts.m:] for r in results], axis=0)
     infos = [r.info for r in results]
@@ -101,7 +112,8 @@ def merged(results: list, dt: float, q, qd, memory: dict) -> StepResult:
     return first._replace(q=q, qd=qd, p=p, w=w, info=info, residuals=residuals,
                           tau=np.sum([r.tau for r in results], axis=0) / n,
                           work_actuators=sum(r.work_actuators for r in results),
-                          work_contacts=sum(r.work_contacts for r in results), q_ref=last.q_ref, memory=memory)
+                          work_contacts=sum(r.work_contacts for r in results), q_ref=last.q_ref, memory=memory,
+                          substeps=n)
 
 
 class TouchdownStepper:
@@ -110,7 +122,7 @@ class TouchdownStepper:
 
     def __init__(self, make, model, settings):
         self.model, self.settings = model, settings
-        self.n, self.dt = settings.touchdown_substeps, settings.dt
+        self.n, self.dt = settings.substeps, settings.dt
         whole = replace(settings, touchdown_substeps=1)
         self.whole = make(model, whole)
         self.sub = make(model, replace(whole, dt=settings.dt / self.n))

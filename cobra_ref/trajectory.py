@@ -14,7 +14,8 @@ hold steps (from t_k to t_k+1):
   max |q - q_ref| at the step's end [rad]), the energy ledger (``kinetic``, ``potential``,
   ``elastic`` at the step's start, ``work_actuators``, ``work_contacts`` over the step [J]) and
   the impacts (``impact_count``, ``impact_impulse`` [N s], ``impact_energy`` [J], see
-  :func:`cobra_ref.reproduce.analysis.impacts`);
+  :func:`cobra_ref.reproduce.analysis.impacts`) and ``substeps``, the steps of dt / n the step was
+  taken in around a touch-down (A33, :mod:`cobra_ref.touchdown`; 1 for a whole step);
 * the contact log (``CONTACT_KEYS``), one row per contact that carries a normal impulse in a
   step: ``contact_step``, ``contact_kind`` (0 robot-ground, 1 robot-box, 2 box-ground),
   ``contact_body`` (body A: the robot link, or the box for box-ground), ``contact_point``
@@ -22,8 +23,9 @@ hold steps (from t_k to t_k+1):
   ``contact_force`` (world, the force ON body A BY body B: frame @ p / dt; the box feels minus
   the robot-box rows), ``contact_onset_speed`` (the approach speed [m/s] of a contact in
   its first loaded step, 0 afterwards), ``contact_gap`` (the gap g at the step's start [m]) and
-  ``contact_gap_end`` (g + dt g', the gap the step's velocity leads to at its end [m]: a
-  compliant contact carries a normal force only where it is negative).
+  ``contact_gap_end`` (g + dt g', the gap the step's velocity leads to at its end [m], in a
+  sub-stepped step the smallest a substep ended at: a compliant contact carries a normal force
+  only where it is negative).
 """
 
 from __future__ import annotations
@@ -42,7 +44,7 @@ from .infra.output import write_binary
 STEP_KEYS = ("fp_converged", "fp_iter", "qp_iter", "qp_solves", "coulomb_residual", "complementarity",
              "cone_residual", "max_penetration", "n_contacts", "max_normal_force", "tau_excess", "q_excess",
              "qd_excess", "tracking_error", "kinetic", "potential", "elastic", "work_actuators", "work_contacts",
-             "impact_count", "impact_impulse", "impact_energy")
+             "impact_count", "impact_impulse", "impact_energy", "substeps")
 CONTACT_KEYS = ("contact_step", "contact_kind", "contact_body", "contact_point", "contact_normal", "contact_force",
                 "contact_onset_speed", "contact_gap", "contact_gap_end")
 
@@ -71,7 +73,8 @@ class Trajectory:
         """The one-line JSON summary of ``cobra-ref simulate``.
 
         The box's displacement, the worst contact conditions, the friction fixed point's
-        convergence, the largest torque, speed.
+        convergence, the largest torque, the share of steps taken in touch-down substeps (A33),
+        speed.
         """
         s = self.steps
         d = self.box_pose[-1, :2] - self.box_pose[0, :2] if len(self.box_pose) else np.zeros(2)
@@ -84,6 +87,7 @@ class Trajectory:
             "fixed_point_converged": float(np.sum(s["fp_converged"])) / n,
             "max_abs_tau": float(np.max(np.abs(self.tau), initial=0.0)),
             "impacts_per_second": float(np.sum(s["impact_count"])) / max(self.duration, 1e-300),
+            "substepped": float(np.sum(s["substeps"] > 1)) / n,
             "real_time_factor": round(self.duration / self.wall_time, 4) if self.wall_time > 0 else None,
             "steps": int(len(self.tau)),
             "error": self.error or None,
@@ -167,7 +171,7 @@ class Trajectory:
         write_binary(path, lambda f: np.savez_compressed(f, **arrays), "NPZ")
 
 
-ADDED_KEYS = ("max_normal_force", "contact_gap", "contact_gap_end")  # keys a record may predate
+ADDED_KEYS = ("max_normal_force", "contact_gap", "contact_gap_end", "substeps")  # keys a record may predate
 RUN_KEYS = ("t", "q", "qd", "tau", "box_pose", "dt", "wall_time", "meta", "error")  # besides the step and contact keys
 
 

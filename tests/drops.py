@@ -79,9 +79,9 @@ def ode_drop(mass: float, v0: float) -> Drop:
 
 
 def step_drop(mass: float, v0: float, dt: float, stepper: str = "reference", max_time: float = 0.03,
-              substeps: int = 1):
+              substeps: int | None = None):
     """(Drop, results): the drop on our step at ``dt`` (the compliant law; ``substeps``: its
-    touch-down taken in that many substeps, A33), stepped until AFTER steps past the first contact
+    touch-down taken in that many substeps, A33; None: the law's default), stepped until AFTER steps past the first contact
     episode's end (at most ``max_time``: a ball that comes to rest in its first contact has no
     rebound, NaN); ``results``: every StepResult."""
     model = ball(mass=mass)

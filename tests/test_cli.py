@@ -40,8 +40,20 @@ def test_python_dash_m_help_lists_the_subcommands():
 # ------------------------------------------------------------------------------ simulate
 
 SUMMARY_KEYS = {"box_displacement", "max_penetration", "max_cone_residual", "max_coulomb_residual",
-                "fixed_point_converged", "max_abs_tau", "impacts_per_second", "real_time_factor",
+                "fixed_point_converged", "max_abs_tau", "impacts_per_second", "substepped", "real_time_factor",
                 "tau_beyond_limit", "contact_force_beyond_bound"}
+
+
+@pytest.mark.parametrize("option, n", [([], 2), (["--touchdown-substeps", "1"], 1), (["--contact", "rigid"], 1)])
+def test_simulate_records_the_touchdown_substeps_it_took(tmp_path, option, n):
+    """The compliant law's touch-downs in two substeps by default, whole steps with
+    --touchdown-substeps 1 or the rigid law (A33): the NPZ's options record the n taken, and no
+    step of the run took more."""
+    out = tmp_path / "run.npz"
+    assert main(["simulate", "--duration", "0.05", "--out", str(out), "--quiet", *option]) == 0
+    with np.load(out) as run:
+        assert json.loads(str(run["meta"]))["options"]["touchdown_substeps"] == n
+        assert set(np.unique(run["substeps"])) <= {1, n}
 
 
 def test_simulate_writes_the_npz_and_prints_one_json_line(tmp_path, capfd):

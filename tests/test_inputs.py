@@ -460,10 +460,10 @@ def _break_the_stepper_at(t_break, exception, monkeypatch, settled):
 
     real = FastStepper.step
 
-    def breaks(self, q, qd, t, reference):
+    def breaks(self, q, qd, t, reference, tau_ext=None):
         if t >= t_break - 1e-12:
             raise exception
-        return real(self, q, qd, t, reference)
+        return real(self, q, qd, t, reference, tau_ext)
 
     monkeypatch.setattr("cobra_ref.cli.simulate._start", lambda *args: settled)
     monkeypatch.setattr(FastStepper, "step", breaks)

@@ -1,11 +1,13 @@
 """Touch-downs sub-stepped (A33, cobra_ref.touchdown): worked examples.
 
 A step of 1 ms resolves a stiff touch-down only roughly; with ``StepSettings(touchdown_substeps=n)``
-the steps around one are taken as n steps of dt / n. What must hold: where nothing touches down
+(the compliant law's default: n = 2) the steps around one are taken as n steps of dt / n. What must hold: where nothing touches down
 the steps are the whole steps, bit for bit; where the step size changes a constant acceleration
 stays exact (the velocity re-read from half a step back to half a substep back); a ball's drop at
 1 ms comes close to the spring-damper's ODE; both steppers sub-step alike; bad input is named.
 """
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -43,7 +45,7 @@ def test_a_constant_acceleration_stays_exact_where_the_step_size_changes():
     whole steps to rounding; without the re-reading they would be off by (dt - dt / n) g dt / 2
     = 3.7e-6 m a step after the first change."""
     model = ball(mass=1.0)
-    whole = make_stepper("fast", model, StepSettings(dt=1e-3))
+    whole = make_stepper("fast", model, StepSettings(dt=1e-3, touchdown_substeps=1))
     sub = TouchdownStepper(lambda m, s: make_stepper("fast", m, s), model,
                            StepSettings(dt=1e-3, touchdown_substeps=4))
     n = 6 + HOLD + 4
@@ -79,7 +81,7 @@ def test_a_drop_at_1_ms_comes_close_to_the_ode_with_its_touch_down_substepped(ma
 def test_the_whole_step_misses_the_1_kg_drop_that_the_substeps_catch():
     """The same 1 kg ball at 0.5 m/s with whole steps of 1 ms: 16 % too deep and 21 % too fast
     (docs/results.md, the drop table), so the test above measures what the substeps add."""
-    drop = relative_error(step_drop(1.0, 0.5, 1e-3, "fast")[0], ode_drop(1.0, 0.5))
+    drop = relative_error(step_drop(1.0, 0.5, 1e-3, "fast", substeps=1)[0], ode_drop(1.0, 0.5))
     assert drop.penetration > 0.1 and drop.rebound > 0.1, drop
 
 
@@ -93,7 +95,10 @@ def test_both_steppers_substep_a_touch_down_alike():
 
 def test_a_substepped_step_logs_its_substeps_summed():
     """The 1 kg ball at 0.5 m/s, four substeps: each whole step's logged normal impulse and
-    actuator-free contact work are the sums of its substeps', its torque their mean (none here)."""
+    actuator-free contact work are the sums of its substeps', its torque their mean (none here),
+    and its gap's end, g + dt w_N, the smallest gap a substep ended at (where the ball rises
+    again, the first substep's, not the last's), so the log's end gap is closed wherever a
+    substep closed the contact."""
     model = ball(mass=1.0)
     stepping = make_stepper("fast", model, StepSettings(dt=1e-3, touchdown_substeps=4))
     taken = []
@@ -101,7 +106,7 @@ def test_a_substepped_step_logs_its_substeps_summed():
     stepping.sub.step = lambda *a: taken.append(sub_step(*a)) or taken[-1]
     z0, v = start(0.5)
     q, qd = at_height(model, z0, v=(0.0, 0.0, v))
-    checked = 0
+    checked = rising = 0
     for k in range(12):
         del taken[:]
         res = stepping.step(q, qd, k * 1e-3, no_joints)
@@ -110,8 +115,22 @@ def test_a_substepped_step_logs_its_substeps_summed():
             assert len(taken) == 4
             assert np.isclose(res.p[0], sum(r.p[0] for r in taken), rtol=1e-14, atol=0)
             assert np.isclose(res.work_contacts, sum(r.work_contacts for r in taken), rtol=1e-14, atol=1e-300)
+            ends = [r.contacts.g[0] + 1e-3 / 4 * r.w[0] for r in taken]
+            assert np.isclose(res.contacts.g[0] + 1e-3 * res.w[0], min(ends), rtol=0, atol=1e-15)
             checked += taken[0].p[0] + taken[-1].p[0] > 0
-    assert checked >= 2
+            rising += min(ends) < ends[-1]
+    assert checked >= 2 and rising >= 1
+
+
+def test_the_compliant_law_substeps_in_two_and_the_rigid_law_takes_whole_steps():
+    """The default (None) is the law's own n (A33): 2 for the compliant spring, whose touch-down
+    lasts a few steps, 1 for the rigid law's one-step velocity jump; a law changed by
+    ``replace`` takes its own default along, and an n given is kept."""
+    assert StepSettings().substeps == 2 and StepSettings(contact="rigid").substeps == 1
+    assert replace(StepSettings(), contact="rigid").substeps == 1
+    assert StepSettings(contact="rigid", touchdown_substeps=4).substeps == 4
+    assert StepSettings(touchdown_substeps=1).substeps == 1
+    assert type(make_stepper("fast", ball(mass=1.0), StepSettings())) is TouchdownStepper
 
 
 @pytest.mark.parametrize("value, error", [(0, ArgumentError), (17, ArgumentError), (2.5, ArgumentError),

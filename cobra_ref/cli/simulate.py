@@ -30,7 +30,7 @@ MODEL_OPTIONS = (("mu", "--mu"), ("mu_robot_box", "--mu-robot-box"), ("mu_box_gr
                  ("box_offset", "--box-offset"), ("box_yaw", "--box-yaw"), ("box_gap", "--box-gap"),
                  ("param", "--param"))
 # the step settings: with --params each one given wins over the optimum's (recorded in the run's meta)
-STEP_OPTIONS = {"dt": DEFAULT_DT, "contact": "compliant", "servo": "position"}
+STEP_OPTIONS = {"dt": DEFAULT_DT, "contact": "compliant", "servo": "position", "touchdown_substeps": None}
 
 
 def cmd_simulate(args) -> int:
@@ -115,11 +115,16 @@ def _start(model, reference, settings, args, inputs: str):
         raise fail(f"the start could not be placed and settled: {type(exc).__name__}: {exc} ({inputs})") from None
 
 
+def step_record(settings) -> dict:
+    """The step options a run used, for its NPZ's meta: the touch-down substeps as taken (A33)."""
+    return {k: getattr(settings, k) for k in STEP_OPTIONS} | {"touchdown_substeps": settings.substeps}
+
+
 def _options(args, duration: float, settings) -> dict:
     """The options of the run, JSON-ready (recorded in the NPZ's meta), with the defaults it used."""
     skip = {"func", "command", "quiet"}
     out = {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(args).items() if k not in skip}
-    out.update(duration=duration, **{k: getattr(settings, k) for k in STEP_OPTIONS})
+    out.update(duration=duration, **step_record(settings))
     out["param"] = dict(args.param or [])
     return out
 
@@ -172,6 +177,9 @@ def add_parsers(sub) -> None:
                    help="joints: position (the paper's position control within tau_max) or prescribed (the joints "
                         "follow the reference exactly, torques recovered) (default position; with --params the "
                         "optimization's, which --servo replaces)")
+    p.add_argument("--touchdown-substeps", type=RULES["touchdown_substeps"].arg("--touchdown-substeps"), default=None,
+                   metavar="N", help="take the steps around a contact's touch-down as N steps of dt / N (A33; "
+                                     "default: 2 for the compliant law, 1 for the rigid law; 1: whole steps)")
     p.add_argument("--stepper", choices=STEPPERS, default="fast",
                    help="fast (default) or reference (the readable step, slow; the same physics)")
     add_model_options(p)
@@ -205,7 +213,7 @@ def cmd_simulate_params(args) -> int:
     for name, option in MODEL_OPTIONS:
         if getattr(args, name, None) not in (None, []):
             raise fail(f"--params replays the optimum with its own model and start: {option} cannot be combined "
-                       "with it (the step options --dt, --contact, --servo and --duration can)")
+                       "with it (the step options --dt, --contact, --servo, --touchdown-substeps and --duration can)")
     step = {k: getattr(args, k) for k in STEP_OPTIONS if getattr(args, k, None) is not None}
     try:
         run = params_reference(args.params, duration=args.duration, step=step)
@@ -217,7 +225,7 @@ def cmd_simulate_params(args) -> int:
     overrides = {**step, **({} if args.duration is None else {"duration": args.duration})}
     meta = {"gait": run.gait, "gait_params": gait_params(run.reference), "params_file": args.params,
             "options": {"params": args.params, "duration": run.duration, "stepper": args.stepper,
-                        **{k: getattr(run.settings, k) for k in STEP_OPTIONS}, "overrides": overrides}}
+                        **step_record(run.settings), "overrides": overrides}}
     job = Job(run.model, run.reference, run.duration, run.settings, run.q0, run.qd0, args.stepper,
               inputs_text(run.settings, run.problem.cobra, stepper=args.stepper, params=args.params))
     run_and_write(job, args.out, f"simulate {args.params}", args.quiet, meta, lambda traj: params_summary(run, traj))

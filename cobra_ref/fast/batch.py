@@ -67,7 +67,7 @@ class BatchStepper:
         self.model, self.settings = models[0], settings
         # touch-down substeps (A33): each member's whole steps are its TouchdownStepper's, its substeps its own
         self.touchdowns = None
-        if settings.touchdown_substeps > 1:
+        if settings.substeps > 1:
             self.touchdowns = [TouchdownStepper(FastStepper, model, settings) for model in models]
             self.members = [touchdown.whole for touchdown in self.touchdowns]
         else:
