@@ -115,7 +115,8 @@ def test_the_compliant_contact_tends_to_the_rigid_one_as_it_stiffens(stepper):
     in both (to 1e-3: the softest is still settling). Both laws take whole steps (the rigid law's
     own, A33), so that the limit compares the laws and not the steps; touch-down substeps re-read
     the velocity where the step size changes, and the logged impulses then differ from the state's
-    change of momentum by the re-read (tests/test_touchdown.py).
+    change of momentum by m (dt - dt / n) / 2 times the change of acceleration between the stretch's
+    ends (tests/test_touchdown.py), here from free fall to rest.
     """
     def landed(settings, **law):
         model = ball(**law)
