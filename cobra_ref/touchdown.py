@@ -71,15 +71,17 @@ def onset(result: StepResult, memory_before: dict | None, dt: float) -> bool:
     if not memory_before:
         return striking(result)
     before = memory_before["contacts"]
-    loaded = (result.p[0:3 * m:3] > LOADED).tolist()
-    return any(on and key not in before for key, on in zip(c.keys(), loaded))
+    return any(on and key not in before for key, on in zip(c.keys(), _loaded(result).tolist()))
 
 
 def striking(result: StepResult) -> bool:
-    """Whether a loaded contact of ``result`` (normal impulse above ``LOADED``) approached faster
-    than ``IMPACT_SPEED``."""
-    m = result.contacts.m
-    return bool(np.any(result.approach[result.p[0:3 * m:3] > LOADED] > IMPACT_SPEED))
+    """Whether a loaded contact of ``result`` approached faster than ``IMPACT_SPEED``."""
+    return bool(np.any(result.approach[_loaded(result)] > IMPACT_SPEED))
+
+
+def _loaded(result: StepResult) -> np.ndarray:
+    """(m,) whether each contact of ``result`` carries a normal impulse above ``LOADED``."""
+    return result.p[0:3 * result.contacts.m:3] > LOADED
 
 
 def merged(results: list, dt: float, q, qd, memory: dict) -> StepResult:
@@ -87,14 +89,12 @@ def merged(results: list, dt: float, q, qd, memory: dict) -> StepResult:
     the whole step's ``memory``."""
     first, last, n = results[0], results[-1], len(results)
     # each loaded contact's world impulse, summed: the substeps' memories hold them by key (an unloaded
-    # contact carries none, friction included)
-    total = {}
+    # contact carries none, friction included); each contact's smallest gap at a substep's end (a
+    # contact can close and open again within the step)
+    total, end_gap = {}, {}
     for r in results:
         for key, P_k in r.memory["contacts"].items():
             total[key] = total.get(key, 0.0) + P_k
-    # each contact's smallest gap at a substep's end (a contact can close and open again within the step)
-    end_gap = {}
-    for r in results:
         for key, g, w_N in zip(r.contacts.keys(), r.contacts.g, r.w[0::3]):
             end_gap[key] = min(end_gap.get(key, np.inf), g + dt / n * w_N)
     m = first.contacts.m
@@ -118,7 +118,7 @@ def merged(results: list, dt: float, q, qd, memory: dict) -> StepResult:
 
 class TouchdownStepper:
     """A stepper (``make(model, settings)``, of either kind) whose touch-downs are sub-stepped into
-    ``settings.touchdown_substeps`` steps (module docstring); the same interface as the others."""
+    ``settings.substeps`` steps (module docstring); the same interface as the others."""
 
     def __init__(self, make, model, settings):
         self.model, self.settings = model, settings
