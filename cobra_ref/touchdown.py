@@ -33,9 +33,10 @@ and the works' sums; ``substeps`` = n. The re-reading of the velocity where the 
 is no logged force, so over a sub-stepped stretch the state's momentum and energy change by the
 logged impulses and works plus the re-reads' shifts (each (dt - dt_f) / 2 a); on whole steps
 the ledger closes as before. A batch
-(:mod:`cobra_ref.fast.batch`) takes its members' whole steps together and each member's
-substeps through the member's own ``TouchdownStepper`` (``holding``, ``after_whole``,
-``substepped``), so that each member is its single run, bit for bit.
+(:mod:`cobra_ref.fast.batch`) takes its members' whole steps together, and then the substeps of
+the members that take their step in substeps together, in a batch of dt / n whose members are
+their ``TouchdownStepper``'s substeps' steppers (``holding``, ``touched``, ``entered``, ``left``),
+so that each member is its single run, bit for bit.
 """
 
 from __future__ import annotations
@@ -120,12 +121,13 @@ class TouchdownStepper:
     """A stepper (``make(model, settings)``, of either kind) whose touch-downs are sub-stepped into
     ``settings.substeps`` steps (module docstring); the same interface as the others."""
 
-    def __init__(self, make, model, settings):
+    def __init__(self, make, model, settings, sub=None):
         self.model, self.settings = model, settings
         self.n, self.dt = settings.substeps, settings.dt
         whole = replace(settings, touchdown_substeps=1)
         self.whole = make(model, whole)
-        self.sub = make(model, replace(whole, dt=settings.dt / self.n))
+        # the stepper of dt / n (a batch passes its member of the substeps' batch; ``sub_settings``)
+        self.sub = make(model, sub_settings(settings)) if sub is None else sub
         self.name = self.whole.name
         self.hold, self._qd_sub, self._returned = 0, None, None
 
@@ -153,7 +155,8 @@ class TouchdownStepper:
         if self.holding(qd):
             return self.substepped(q, qd, t, reference, tau_ext, self.whole.memory)
         memory = self.whole.memory
-        return self.after_whole(self.whole.step(q, qd, t, reference, tau_ext), memory, q, qd, t, reference, tau_ext)
+        result = self.whole.step(q, qd, t, reference, tau_ext)
+        return self.substepped(q, qd, t, reference, tau_ext, memory) if self.touched(result, memory) else result
 
     def holding(self, qd) -> bool:
         """Whether the step from qd goes straight to substeps: within the hold after a strike, and
@@ -162,36 +165,49 @@ class TouchdownStepper:
             self.hold = 0
         return bool(self.hold)
 
-    def after_whole(self, result: StepResult, memory, q, qd, t: float, reference, tau_ext=None) -> StepResult:
-        """The whole step ``result`` (taken from ``memory``), or, where a contact touched down in it
-        (``onset``), the step taken again in substeps from the same state and memory."""
+    def touched(self, result: StepResult, memory) -> bool:
+        """Whether a contact touched down (``onset``) in the whole step ``result``, taken from
+        ``memory``; if so the whole stepper's memory goes back to ``memory``, for the step to be
+        taken again in substeps."""
         if not onset(result, memory, self.dt):
-            return result
+            return False
         self.whole.memory = memory
-        return self.substepped(q, qd, t, reference, tau_ext, memory)
+        return True
 
     def substepped(self, q, qd, t: float, reference, tau_ext, memory) -> StepResult:
         """The step of dt from (q, qd) at t as n substeps, from the whole step's ``memory`` (or,
         while held, from where the last substep left), merged into one result (module docstring)."""
+        qd_sub, results = self.entered(qd, memory), []
+        for i in range(self.n):
+            results.append(self.sub.step(q, qd_sub, t + i * self.dt / self.n, reference, tau_ext))
+            q, qd_sub = results[-1].q, results[-1].qd
+        return self.left(results)
+
+    def entered(self, qd, memory) -> np.ndarray:
+        """The velocity the first substep starts from, the sub stepper's memory set for it: into
+        substeps, qd (half a step back) re-read half a substep back from the whole step's ``memory``;
+        while held, where the last substep left."""
+        if self.hold:
+            return self._qd_sub
+        qd_prev = memory["qd"] if memory and memory.get("qd") is not None else qd
+        a = (qd - qd_prev) / self.dt
+        qd_sub = qd + 0.5 * (self.dt - self.dt / self.n) * a
+        self.sub.memory = _scaled(memory, 1.0 / self.n, qd_sub - a * self.dt / self.n)
+        return qd_sub
+
+    def left(self, results: list) -> StepResult:
+        """The step of dt from the n substeps' ``results``, merged, its velocity re-read half a step
+        back, as the next whole step reads it; the hold counted on."""
         dt, n = self.dt, self.n
-        shift = 0.5 * (dt - dt / n)
-        if not self.hold:  # into substeps: the velocity half a substep back, from half a step back
-            qd_prev = memory["qd"] if memory and memory.get("qd") is not None else qd
-            a = (qd - qd_prev) / dt
-            qd_sub = qd + shift * a
-            self.sub.memory = _scaled(memory, 1.0 / n, qd_sub - a * dt / n)
-        else:
-            qd_sub = self._qd_sub
-        results, strikes = [], False
-        for i in range(n):
-            r = self.sub.step(q, qd_sub, t + i * dt / n, reference, tau_ext)
-            q, qd_sub = r.q, r.qd
-            strikes |= striking(r)
-            results.append(r)
-        self.hold = HOLD if strikes or not self.hold else self.hold - 1
-        # out of substeps: the velocity half a step back, as the next whole step reads it
+        self.hold = HOLD if any(striking(r) for r in results) or not self.hold else self.hold - 1
+        q, qd_sub = results[-1].q, results[-1].qd
         a = (qd_sub - self.sub.memory["qd"]) * n / dt
-        qd_whole = qd_sub - shift * a
+        qd_whole = qd_sub - 0.5 * (dt - dt / n) * a
         memory = _scaled(self.sub.memory, float(n), qd_whole - a * dt)
         self.whole.memory, self._qd_sub, self._returned = memory, qd_sub, qd_whole
         return merged(results, dt, q, qd_whole, memory)
+
+
+def sub_settings(settings):
+    """The settings of a touch-down's substeps: whole steps of dt / ``settings.substeps``."""
+    return replace(settings, touchdown_substeps=1, dt=settings.dt / settings.substeps)

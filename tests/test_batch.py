@@ -10,7 +10,7 @@ from cobra_ref.params import CobraParameters
 from cobra_ref.robots import cobra_model
 from cobra_ref.simulate import simulate
 from cobra_ref.start import BoxPlacement, initial_state
-from cobra_ref.step import StepSettings
+from cobra_ref.step import SimulationError, StepSettings
 
 SETTINGS = StepSettings(dt=1e-3)
 
@@ -112,6 +112,51 @@ def test_a_failing_member_leaves_the_batch_and_the_others_go_on():
     assert len(J.tau) == 100  # the steps before the failure are kept
     assert C.error == side.error == "" and len(C.tau) == len(side.tau) == 200
     _same_run(side, simulate(model, references[2], 0.2, SETTINGS, *starts[2]))
+
+
+@pytest.mark.slow
+def test_members_touching_down_together_take_their_substeps_together_as_alone():
+    # three C rollouts from one start, their amplitudes 0.01 % apart (a planner's candidates): their
+    # touch-downs fall on the same steps, so their substeps (A33) go as one batch of dt / 2, from
+    # BATCHED_FROM members on with their problems and friction loops written together
+    from cobra_ref.fast.batch import BATCHED_FROM
+
+    model, amplitude = cobra_model(), gait("C").amplitude
+    references = [gait("C", amplitude=amplitude * f) for f in (1.0, 1.0001, 0.9999)]
+    start = initial_state(model, references[0], SETTINGS)
+    batch = simulate_batch(model, references, 0.2, SETTINGS, [start] * 3)
+    together = np.sum([traj.steps["substeps"] > 1 for traj in batch], axis=0) >= BATCHED_FROM
+    assert together.sum() >= 2
+    for traj, ref in zip(batch, references):
+        _same_run(traj, simulate(model, ref, 0.2, SETTINGS, *start))
+
+
+class _BrokenBetweenSteps(_Broken):
+    """A reference that stops being finite after t_end at the half steps only, which touch-down
+    substeps (A33) read and whole steps do not: the member fails in a substep."""
+
+    def __call__(self, t):
+        q, qd, qdd = self.reference(t)
+        half_step = round(t / (SETTINGS.dt / 2)) % 2 == 1
+        return (q * np.nan, qd, qdd) if t > self.t_end and half_step else (q, qd, qdd)
+
+
+@pytest.mark.slow
+def test_a_member_failing_in_a_substep_fails_as_its_single_run_and_the_others_go_on():
+    # the members' substeps are taken together, in a batch of dt / 2: C fails in its first touch-down
+    # after 0.05 s, in that batch, as alone
+    model, references, starts = _members()
+    references[0] = _BrokenBetweenSteps(references[0], 0.05)
+    batch = simulate_batch(model, references, 0.3, SETTINGS, starts)
+    with pytest.raises(SimulationError, match="not finite at t = 0.1375 s") as err:  # a half step
+        simulate(model, references[0], 0.3, SETTINGS, *starts[0])
+    alone = err.value.trajectory
+    assert batch[0].error == alone.error and "not finite" in alone.error
+    assert len(alone.tau) == 137 and np.all(alone.steps["substeps"] == 1)  # the failed step is not logged
+    _same_run(batch[0], alone)
+    for traj, ref, (q0, qd0) in zip(batch[1:], references[1:], starts[1:]):
+        assert traj.error == ""
+        _same_run(traj, simulate(model, ref, 0.3, SETTINGS, q0, qd0))
 
 
 @pytest.mark.slow

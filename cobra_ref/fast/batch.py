@@ -29,7 +29,7 @@ import numpy as np
 
 from ..model import Model
 from ..step import StepSettings, midpoint_velocity
-from ..touchdown import TouchdownStepper
+from ..touchdown import TouchdownStepper, sub_settings
 from .chain import ChainTerms
 from .contacts import contact_jacobian_batch, find_contacts_batch
 from .iterate_batch import kkt_all, solve_all
@@ -65,10 +65,13 @@ class BatchStepper:
         if not all(m is models[0] or same_bodies(models[0], m) for m in models[1:]):
             raise ValueError("the members of a batch must have the same bodies, joints and contact geometry")
         self.model, self.settings = models[0], settings
-        # touch-down substeps (A33): each member's whole steps are its TouchdownStepper's, its substeps its own
-        self.touchdowns = None
+        # touch-down substeps (A33): each member's whole steps are its TouchdownStepper's, its substeps those
+        # of its member of a second batch, of dt / n
+        self.touchdowns, self.sub = None, None
         if settings.substeps > 1:
-            self.touchdowns = [TouchdownStepper(FastStepper, model, settings) for model in models]
+            self.sub = BatchStepper(models, sub_settings(settings))
+            self.touchdowns = [TouchdownStepper(FastStepper, model, settings, sub=sub)
+                               for model, sub in zip(models, self.sub.members)]
             self.members = [touchdown.whole for touchdown in self.touchdowns]
         else:
             self.members = [FastStepper(model, settings) for model in models]
@@ -85,27 +88,43 @@ class BatchStepper:
         """One step at time t of the members ``active`` (indices), from their rows of Q (K, nq) and
         QD (K, nv), each following its ``references[k]``: a ``step.StepResult`` per active member,
         or the exception its step raised (that member's step is then not taken). With touch-down
-        substeps, the members' whole steps are taken together and each member's substeps on its own,
-        as its ``TouchdownStepper`` takes them."""
+        substeps, the members' whole steps are taken together, and then the substeps of those members
+        that take their step in substeps, together, as each one's ``TouchdownStepper`` takes them."""
         if self.touchdowns is None:
             return self._whole(Q, QD, t, references, active)
         held = [k for k in active if self.touchdowns[k].holding(QD[k])]
         whole = [k for k in active if k not in held]
         memories = {k: self.members[k].memory for k in whole}
-        results = dict(zip(whole, self._whole(Q, QD, t, references, whole))) if whole else {}
-        out = []
-        for k in active:
-            touchdown, r = self.touchdowns[k], results.get(k)
-            try:
-                if k in results and not isinstance(r, Exception):
-                    r = touchdown.after_whole(r, memories[k], Q[k], QD[k], t, references[k])
-                elif k not in results:
-                    r = touchdown.substepped(Q[k], QD[k], t, references[k], None, self.members[k].memory)
-            except KeyboardInterrupt:
-                raise
-            except Exception as exc:
-                r = exc
-            out.append(r)
+        out = dict(zip(whole, self._whole(Q, QD, t, references, whole))) if whole else {}
+        # in substeps: the held members, and those whose whole step touched down
+        sub = [k for k in active if k in held
+               or not isinstance(out[k], Exception) and self.touchdowns[k].touched(out[k], memories[k])]
+        if sub:
+            out.update(self._substepped(Q, QD, t, references, sub))
+        return [out[k] for k in active]
+
+    def _substepped(self, Q: np.ndarray, QD: np.ndarray, t: float, references, members) -> dict:
+        """Each of ``members``' step at t taken in substeps (``TouchdownStepper.substepped``), the
+        members' substeps together by the batch of dt / n: member k's result, or its exception."""
+        dt, n = self.settings.dt, self.settings.substeps
+        out = {k: _call(self.touchdowns[k].entered, QD[k], self.members[k].memory) for k in members}
+        going = [k for k in members if not isinstance(out[k], Exception)]
+        Q_sub, QD_sub = Q.copy(), QD.copy()
+        for k in going:
+            QD_sub[k] = out[k]
+        results = {k: [] for k in going}
+        for i in range(n):
+            if not going:
+                break
+            for k, r in zip(going, self.sub._whole(Q_sub, QD_sub, t + i * dt / n, references, going)):
+                if isinstance(r, Exception):
+                    out[k] = r
+                else:
+                    results[k].append(r)
+                    Q_sub[k], QD_sub[k] = r.q, r.qd
+            going = [k for k in going if not isinstance(out[k], Exception)]
+        for k in going:
+            out[k] = _call(self.touchdowns[k].left, results[k])
         return out
 
     def _whole(self, Q: np.ndarray, QD: np.ndarray, t: float, references, active) -> list:
@@ -132,12 +151,7 @@ class BatchStepper:
     def _member(self, k: int, phase: str, *args):
         """Member k's ``FastStepper`` method ``phase`` (``prepare``, ``rows``, ``posed``, ``finish``)
         on ``args``, or the exception it raised (that member fails; the others go on)."""
-        try:
-            return getattr(self.members[k], phase)(*args)
-        except KeyboardInterrupt:
-            raise
-        except Exception as exc:
-            return exc
+        return _call(getattr(self.members[k], phase), *args)
 
     def _posed(self, rows, active) -> list:
         """Each member's step of ``rows`` prepared with its least-action problem, the problems written
@@ -181,3 +195,13 @@ class BatchStepper:
                 residuals[j] = kkt
         self.batched_seconds += time.perf_counter() - start
         return residuals
+
+
+def _call(method, *args):
+    """``method(*args)``, or the exception it raised: a member's failure, which the others outlive."""
+    try:
+        return method(*args)
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:
+        return exc
