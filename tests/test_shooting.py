@@ -366,6 +366,20 @@ def test_params_json_holds_every_setting(params_file, problem):
     assert len(record["history"]) == 2 and {"cost", "box_distance_to_goal", "params"} <= set(record["history"][0])
 
 
+def test_params_json_keeps_the_touchdown_substeps_the_run_took(params_file, problem):
+    # the file records the setting (None: the law's default, A33) and the n it meant; a file whose n is not
+    # this code's default is read with its own n, an older file without them with the default
+    s = json.loads(params_file.read_text())["settings"]
+    assert s["step_settings"]["touchdown_substeps"] is None and s["step_settings"]["substeps"] == 2
+    s["step_settings"]["substeps"] = 4
+    assert sh.problem_from_dict(s).settings.substeps == 4
+    del s["step_settings"]
+    assert sh.problem_from_dict(s) == problem
+    s["step_settings"] = {"substeps": 0}
+    with pytest.raises(sh.ShootingError, match="step_settings: .*touchdown_substeps"):
+        sh.problem_from_dict(s)
+
+
 @pytest.mark.parametrize("text, message", [
     ("{not json", "not a readable JSON"),
     ('{"format": "something else"}', "not a params file"),

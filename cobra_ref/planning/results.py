@@ -28,7 +28,9 @@ from .problem import DECISION, FORMAT, ShootingError, ShootingProblem, Weights, 
 
 CHECK_DT = 5e-4  # [s] the high-fidelity check's step, the converged setting (docs/results.md, "Does a result
 # hold when dt halves?")
-STEP_SETTINGS_KEYS = ("dt", "contact", "servo", "margin")  # the params JSON's "step_settings"
+# the params JSON's "step_settings": ``substeps`` is the touch-down substeps n the run took (A33), also where
+# ``touchdown_substeps`` is None, the law's default
+STEP_SETTINGS_KEYS = ("dt", "contact", "servo", "margin", "touchdown_substeps", "substeps")
 TRANSFER_KEYS = ("plan_dt", "check_dt", "plan_distance_to_goal", "check_distance_to_goal",
                  "plan_impact_impulse_per_s", "check_impact_impulse_per_s")
 
@@ -143,7 +145,12 @@ def _read_cobra(d, parts) -> dict:
 
 def _read_step_settings(d, parts) -> dict:
     servo, contact = str(d.get("servo", "position")), str(d.get("contact", "compliant"))
-    return {"settings": StepSettings(dt=parts["dt"], contact=contact, servo=servo)}
+    recorded = d.get("step_settings") or {}  # a file that predates it: the law's default substeps
+    settings = StepSettings(dt=parts["dt"], contact=contact, servo=servo,
+                            touchdown_substeps=recorded.get("touchdown_substeps"))
+    if recorded.get("substeps", settings.substeps) != settings.substeps:  # the law's default moved: the run's n
+        settings = dataclasses.replace(settings, touchdown_substeps=recorded["substeps"])
+    return {"settings": settings}
 
 
 def _read_problem(d, parts) -> dict:
@@ -165,7 +172,8 @@ _SETTINGS_READERS = (("settings", _read_object), ("settings.decision", _read_dec
                      ("settings.dt/duration", _read_time), ("settings.goal", _read_goal),
                      ("settings.fixed", _read_fixed), ("settings.weights", _read_weights),
                      ("settings.box_pose0/middle_pose0/box_direction", _read_poses),
-                     ("settings.cobra_parameters", _read_cobra), ("settings.servo/contact", _read_step_settings),
+                     ("settings.cobra_parameters", _read_cobra),
+                     ("settings.servo/contact/step_settings", _read_step_settings),
                      ("settings", _read_problem), ("settings (the gait at x0)", _read_gait))
 
 
